@@ -1,0 +1,1 @@
+"""Policies: one small protocol shared by scripted experts, diffusion policies and SB3 policies."""

@@ -1,0 +1,35 @@
+"""The policy protocol every method in IMPACT implements.
+
+A policy acts on a *batch* of observations so that evaluation can step many environments in
+lockstep and run one batched network call per step. Observations are the env's ``Dict``
+observation stacked along a leading batch axis: ``{key: array (B, *shape)}``. Actions are
+``(B, 10)`` float32: TCP target position [m, world], rot6d of the TCP target orientation
+(first two columns of R, column-major), gripper command in [-1 (open), +1 (closed)].
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+ACTION_DIM = 10
+"""Length of an action: position (3) + rot6d (6) + gripper (1)."""
+
+
+@runtime_checkable
+class Policy(Protocol):
+    """Batched, stateful policy: ``reset`` before each batch of episodes, ``act`` every step."""
+
+    def reset(self, n_envs: int) -> None:
+        """Clear internal state (observation history, action queue, phase) for ``n_envs`` envs."""
+        ...
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """Return actions ``(B, 10)`` float32 for the batched observation ``obs``."""
+        ...
+
+
+def stack_obs(obs_list: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """Stack per-env Dict observations into one batched dict ``{key: (B, ...)}``."""
+    return {k: np.stack([o[k] for o in obs_list]) for k in obs_list[0]}
