@@ -1,0 +1,141 @@
+"""The controller's model of the arm: Pinocchio built from the same MJCF the simulator loads.
+
+The finger joints are locked (``buildReducedModel``) at a fixed opening, so the model has the
+7 arm joints. Rotor armature is part of the mass matrix (Pinocchio's ``crba`` adds it), as in
+MuJoCo. The model can be perturbed on purpose to study model error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from impact_envs.errors import InvalidArgumentError
+
+ROBOT_XML = Path(__file__).resolve().parent.parent / "assets" / "fr3_hand.xml"
+"""The robot-only MJCF (one root body at the identity pose)."""
+
+ARM_JOINTS = tuple(f"fr3_joint{i}" for i in range(1, 8))
+FINGER_JOINTS = ("finger_joint1", "finger_joint2")
+TCP_FRAME = "tcp"
+
+
+@dataclass(frozen=True)
+class ModelPerturbation:
+    """Deliberate error in the controller's inertial model (the simulator is unchanged).
+
+    Attributes:
+        link_mass_scale: factor applied to every link's mass and rotational inertia [-].
+        link_mass_noise: std of an extra per-link relative factor ``1 + noise * N(0, 1)`` [-].
+        seed: seed of the per-link noise.
+    """
+
+    link_mass_scale: float = 1.0
+    link_mass_noise: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not self.link_mass_scale > 0.0:
+            raise InvalidArgumentError(
+                f"link_mass_scale must be > 0, got {self.link_mass_scale}"
+            )
+        if not 0.0 <= self.link_mass_noise < 0.5:
+            raise InvalidArgumentError(
+                f"link_mass_noise must be in [0, 0.5), got {self.link_mass_noise}"
+            )
+
+
+def _perturb(model: pin.Model, perturbation: ModelPerturbation) -> None:
+    rng = np.random.default_rng(perturbation.seed)
+    for i in range(1, model.njoints):
+        factor = perturbation.link_mass_scale * (
+            1.0 + perturbation.link_mass_noise * rng.standard_normal()
+        )
+        inertia = model.inertias[i]
+        model.inertias[i] = pin.Inertia(
+            inertia.mass * factor, inertia.lever.copy(), inertia.inertia * factor
+        )
+
+
+class PinocchioArm:
+    """Kinematics and rigid-body dynamics of the 7-DoF arm at the TCP.
+
+    Call :meth:`update` once per control tick, then read the cached attributes:
+    ``pos_ee_world`` (3,) [m], ``rot_ee_world`` (3, 3), ``jacobian`` (6, 7) world-aligned at the
+    TCP with rows (linear; angular), ``mass_matrix`` (7, 7) [kg m^2] incl. armature,
+    ``gravity`` (7,) [Nm], ``coriolis_matrix`` (7, 7) [Nm s].
+
+    Args:
+        xml_path: robot MJCF; defaults to the shipped FR3 + Hand.
+        finger_opening_m: opening of each finger at which the fingers are locked [m].
+        perturbation: optional deliberate inertial model error.
+    """
+
+    n: int = 7
+
+    def __init__(
+        self,
+        xml_path: str | Path | None = None,
+        *,
+        finger_opening_m: float = 0.02,
+        perturbation: ModelPerturbation | None = None,
+    ) -> None:
+        full = pin.buildModelFromMJCF(str(xml_path or ROBOT_XML))
+        q_lock = pin.neutral(full)
+        lock_ids = []
+        for name in FINGER_JOINTS:
+            jid = full.getJointId(name)
+            lock_ids.append(jid)
+            q_lock[full.joints[jid].idx_q] = finger_opening_m
+        self.model: pin.Model = pin.buildReducedModel(full, lock_ids, q_lock)
+        if perturbation is not None:
+            _perturb(self.model, perturbation)
+        if list(self.model.names)[1:] != list(ARM_JOINTS):
+            raise InvalidArgumentError(f"unexpected joints in {xml_path}: {list(self.model.names)}")
+        self.data = self.model.createData()
+        self._tcp = self.model.getFrameId(TCP_FRAME)
+        self.damping = np.asarray(self.model.damping, dtype=float).copy()
+        self.q_lower = np.asarray(self.model.lowerPositionLimit, dtype=float).copy()
+        self.q_upper = np.asarray(self.model.upperPositionLimit, dtype=float).copy()
+        self.torque_limits = np.asarray(self.model.effortLimit, dtype=float).copy()
+        self.pos_ee_world = np.zeros(3)
+        self.rot_ee_world = np.eye(3)
+        self.jacobian = np.zeros((6, 7))
+        self.mass_matrix = np.eye(7)
+        self.gravity = np.zeros(7)
+        self.coriolis_matrix = np.zeros((7, 7))
+        self._triu = np.triu_indices(7, 1)
+
+    def update(self, q: np.ndarray, dq: np.ndarray) -> None:
+        """Recompute every cached quantity at joint positions ``q`` [rad], velocities ``dq``."""
+        model, data = self.model, self.data
+        pin.computeAllTerms(model, data, q, dq)
+        pin.updateFramePlacement(model, data, self._tcp)
+        placement = data.oMf[self._tcp]
+        self.pos_ee_world = placement.translation.copy()
+        self.rot_ee_world = placement.rotation.copy()
+        self.jacobian = pin.getFrameJacobian(model, data, self._tcp, pin.LOCAL_WORLD_ALIGNED)
+        mass = data.M.copy()
+        mass[self._triu[1], self._triu[0]] = mass[self._triu]
+        self.mass_matrix = mass
+        self.gravity = pin.computeGeneralizedGravity(model, data, q).copy()
+        self.coriolis_matrix = pin.computeCoriolisMatrix(model, data, q, dq).copy()
+
+    def joint_friction(self, dq: np.ndarray) -> np.ndarray:
+        """Joint friction torque [Nm] that the torque sensor does NOT see, for the residual.
+
+        The simulated joint-torque sensor sits on the link side of the transmission, after
+        joint damping and Coulomb friction (docs/sensing.md), so the friction a residual
+        estimator must model is zero. ``self.damping`` keeps the MJCF viscous coefficients.
+        """
+        return np.zeros_like(dq)
+
+    def forward_kinematics(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """TCP position [m] and rotation matrix in the world frame at ``q`` (no caching)."""
+        data = self.model.createData()
+        pin.framesForwardKinematics(self.model, data, q)
+        placement = data.oMf[self._tcp]
+        return placement.translation.copy(), placement.rotation.copy()

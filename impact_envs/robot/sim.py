@@ -1,0 +1,220 @@
+"""MuJoCo side of the robot: a thin adapter that looks names up once.
+
+It reads the simulated sensors (encoders and joint-torque sensors, with configurable noise),
+applies joint torques and the gripper command, and classifies contacts for safety metrics.
+Everything a real FR3 would not provide (true contact forces, object poses) is exposed under
+names that say so; the controller never sees it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from impact_envs.errors import InvalidArgumentError, SimulationError
+from impact_envs.robot.dynamics import ARM_JOINTS, FINGER_JOINTS
+
+ASSETS = Path(__file__).resolve().parent.parent / "assets"
+
+GROUP_OTHER, GROUP_ROBOT, GROUP_OBJECT = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class SensorNoise:
+    """Noise of the simulated proprioception (docs/sensing.md gives the sources).
+
+    Attributes:
+        q_std_rad: white noise on joint positions [rad].
+        dq_std_rad_s: white noise on joint velocities [rad/s].
+        tau_std_nm: white noise on the joint-torque sensors [Nm].
+        tau_bias_std_nm: std of a per-episode constant torque-sensor offset [Nm].
+    """
+
+    q_std_rad: float = 1e-5
+    dq_std_rad_s: float = 1e-3
+    tau_std_nm: float = 0.05
+    tau_bias_std_nm: float = 0.02
+
+    def __post_init__(self) -> None:
+        for name in ("q_std_rad", "dq_std_rad_s", "tau_std_nm", "tau_bias_std_nm"):
+            if not getattr(self, name) >= 0.0:
+                raise InvalidArgumentError(f"SensorNoise.{name} must be >= 0")
+
+    @classmethod
+    def off(cls) -> SensorNoise:
+        """Noise-free sensing."""
+        return cls(0.0, 0.0, 0.0, 0.0)
+
+
+class FrankaSim:
+    """A MuJoCo scene that contains the FR3 + Hand (``fr3_hand.xml``) and task objects.
+
+    Args:
+        scene_xml: scene file (absolute, or a file name inside ``impact_envs/assets``).
+        object_bodies: names of the task's movable bodies (grouped as "object" for contacts).
+        grasp_force_n: gripper squeeze force when closing on an object [N].
+        noise: sensor noise model.
+    """
+
+    def __init__(
+        self,
+        scene_xml: str | Path,
+        object_bodies: tuple[str, ...] = (),
+        *,
+        grasp_force_n: float = 70.0,
+        noise: SensorNoise | None = None,
+    ) -> None:
+        path = Path(scene_xml)
+        if not path.is_absolute():
+            path = ASSETS / path
+        self.model = mujoco.MjModel.from_xml_path(str(path))
+        self.data = mujoco.MjData(self.model)
+        self.noise = noise or SensorNoise()
+        m = self.model
+        self.dt = float(m.opt.timestep)
+        self.arm_qpos = np.array([m.jnt_qposadr[m.joint(n).id] for n in ARM_JOINTS])
+        self.arm_dof = np.array([m.jnt_dofadr[m.joint(n).id] for n in ARM_JOINTS])
+        self.finger_qpos = np.array([m.jnt_qposadr[m.joint(n).id] for n in FINGER_JOINTS])
+        self.arm_act = np.array([m.actuator(f"tau{i}").id for i in range(1, 8)])
+        self.gripper_act = m.actuator("gripper").id
+        self.tcp_site = m.site("tcp").id
+        self.torque_limits = m.actuator_ctrlrange[self.arm_act, 1].copy()
+        self.set_grasp_force(grasp_force_n)
+        self.geom_group = self._classify_geoms(object_bodies)
+        self._tau_bias = np.zeros(7)
+        self._fric_type = int(mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF)
+        self.tau_applied = np.zeros(7)
+
+    def _classify_geoms(self, object_bodies: tuple[str, ...]) -> np.ndarray:
+        m = self.model
+        root = m.body("fr3_link0").id
+        objects = {m.body(n).id for n in object_bodies}
+        group = np.full(m.ngeom, GROUP_OTHER, dtype=np.int8)
+        for g in range(m.ngeom):
+            body = int(m.geom_bodyid[g])
+            if body in objects or int(m.body_rootid[body]) in objects:
+                group[g] = GROUP_OBJECT
+            elif int(m.body_rootid[body]) == int(m.body_rootid[root]) and body != 0:
+                group[g] = GROUP_ROBOT
+        return group
+
+    def set_grasp_force(self, force_n: float) -> None:
+        """Set the gripper squeeze force [N] (the tendon carries each finger at coef 0.5)."""
+        if not 0.0 < force_n <= 200.0:
+            raise InvalidArgumentError(f"grasp_force_n must be in (0, 200] N, got {force_n}")
+        self.model.actuator_forcerange[self.gripper_act] = (-2.0 * force_n, 2.0 * force_n)
+
+    # ----------------------------------------------------------------- state
+    def reset_robot(self, q: np.ndarray, finger_opening_m: float, rng: np.random.Generator) -> None:
+        """Place the arm at rest at ``q`` with the fingers at ``finger_opening_m`` each."""
+        d = self.data
+        d.qpos[self.arm_qpos] = q
+        d.qvel[self.arm_dof] = 0.0
+        d.qpos[self.finger_qpos] = finger_opening_m
+        d.ctrl[:] = 0.0
+        d.ctrl[self.gripper_act] = finger_opening_m
+        self.tau_applied[:] = 0.0
+        self._tau_bias = self.noise.tau_bias_std_nm * rng.standard_normal(7)
+
+    def arm_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """True joint positions [rad] and velocities [rad/s] (privileged)."""
+        return self.data.qpos[self.arm_qpos].copy(), self.data.qvel[self.arm_dof].copy()
+
+    def read_sensors(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Encoder and joint-torque sensor readings with noise: ``(q, dq, tau_measured)``.
+
+        The torque sensor sits on the link side of each joint's transmission: it reads the motor
+        torque minus joint damping and Coulomb friction, so the rigid-body equation
+        ``M(q) q'' + C q' + g = tau_measured + tau_ext`` holds with the armature in M.
+        """
+        d, n = self.data, self.noise
+        q = d.qpos[self.arm_qpos] + n.q_std_rad * rng.standard_normal(7)
+        dq = d.qvel[self.arm_dof] + n.dq_std_rad_s * rng.standard_normal(7)
+        tau = self.true_joint_torque() + self._tau_bias + n.tau_std_nm * rng.standard_normal(7)
+        return q, dq, tau
+
+    def true_joint_torque(self) -> np.ndarray:
+        """Noise-free link-side joint torque of the last step [Nm]."""
+        d = self.data
+        tau = d.qfrc_actuator[self.arm_dof] + d.qfrc_damper[self.arm_dof]
+        nefc = d.nefc
+        if nefc:
+            rows = np.flatnonzero(d.efc_type[:nefc] == self._fric_type)
+            if rows.size:
+                fric = np.zeros(self.model.nv)
+                np.add.at(fric, d.efc_id[rows], d.efc_force[rows])
+                tau = tau + fric[self.arm_dof]
+        return tau
+
+    def gripper_width(self) -> float:
+        """Distance between the finger pads [m] (encoder of the hand)."""
+        return float(self.data.qpos[self.finger_qpos].sum())
+
+    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """True TCP position [m] and rotation matrix in the world frame."""
+        d = self.data
+        return d.site_xpos[self.tcp_site].copy(), d.site_xmat[self.tcp_site].reshape(3, 3).copy()
+
+    # --------------------------------------------------------------- actuation
+    def apply(self, tau: np.ndarray, gripper_cmd: float) -> None:
+        """Set joint torques [Nm] (saturated at the FR3 limits) and the gripper command.
+
+        ``gripper_cmd`` in [-1, 1]: -1 fully open (0.08 m), +1 closed (force-limited squeeze).
+        """
+        np.clip(tau, -self.torque_limits, self.torque_limits, out=self.tau_applied)
+        d = self.data
+        d.ctrl[self.arm_act] = self.tau_applied
+        d.ctrl[self.gripper_act] = 0.02 * (1.0 - float(np.clip(gripper_cmd, -1.0, 1.0)))
+
+    def step(self) -> None:
+        """Advance the physics by one control tick (``dt``)."""
+        mujoco.mj_step(self.model, self.data)
+
+    def check_finite(self) -> None:
+        """Raise SimulationError when the state diverged."""
+        d = self.data
+        if not (np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all()):
+            raise SimulationError(f"non-finite state at t={d.time:.3f} s")
+        if np.abs(d.qvel).max() > 100.0:
+            raise SimulationError(f"velocity blow-up at t={d.time:.3f} s")
+
+    # ---------------------------------------------------------------- contacts
+    def contact_forces(self) -> tuple[float, float]:
+        """Total normal contact force [N] robot-vs-environment and object-vs-environment.
+
+        "Environment" is everything that is neither robot nor task object (table, basket, pads).
+        Finger-object contacts (the grasp) are excluded. Uses the first (normal) row of each
+        contact in the elliptic-cone constraint layout.
+        """
+        d = self.data
+        ncon = d.ncon
+        if ncon == 0:
+            return 0.0, 0.0
+        geoms = d.contact.geom[:ncon]
+        groups = self.geom_group[geoms]
+        normal = d.efc_force[d.contact.efc_address[:ncon]]
+        valid = d.contact.efc_address[:ncon] >= 0
+        g1, g2 = groups[:, 0], groups[:, 1]
+        robot_env = ((g1 == GROUP_ROBOT) & (g2 == GROUP_OTHER)) | (
+            (g2 == GROUP_ROBOT) & (g1 == GROUP_OTHER)
+        )
+        obj_env = ((g1 == GROUP_OBJECT) & (g2 == GROUP_OTHER)) | (
+            (g2 == GROUP_OBJECT) & (g1 == GROUP_OTHER)
+        )
+        return float(normal[robot_env & valid].sum()), float(normal[obj_env & valid].sum())
+
+    def object_finger_contacts(self, object_body: str) -> int:
+        """Number of finger-pad contacts touching ``object_body`` (privileged grasp check)."""
+        m, d = self.model, self.data
+        target = m.body(object_body).id
+        count = 0
+        for i in range(d.ncon):
+            b1 = m.geom_bodyid[d.contact.geom1[i]]
+            b2 = m.geom_bodyid[d.contact.geom2[i]]
+            names = {m.body(b1).name, m.body(b2).name}
+            if target in (b1, b2) and names & {"left_finger", "right_finger"}:
+                count += 1
+        return count
