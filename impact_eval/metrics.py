@@ -1,0 +1,142 @@
+"""Per-episode metrics (one ``episodes.csv`` row) and binomial confidence intervals."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+EPISODE_COLUMNS: tuple[str, ...] = (
+    "method",
+    "env_id",
+    "param_name",
+    "param_value",
+    "seed",
+    "episode",
+    "success",
+    "success_once",
+    "length",
+    "time_to_success_s",
+    "energy_j",
+    "peak_torque_nm",
+    "peak_contact_force_n",
+    "mean_pose_error_m",
+    "failure_reason",
+)
+"""Columns of ``episodes.csv``, in file order. No wall-clock values (the file is deterministic)."""
+
+Z_95 = 1.959963984540054
+"""Two-sided 95 % standard-normal quantile."""
+
+MAX_REASON_CHARS = 200
+"""``failure_reason`` is cut to this length and kept on one line."""
+
+
+def wilson_interval(successes: int, n: int, z: float = Z_95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion.
+
+    Args:
+        successes: number of successes ``k`` (0 <= k <= n).
+        n: number of trials; ``n == 0`` gives ``(nan, nan)``.
+        z: normal quantile (1.96 for 95 %).
+
+    Returns:
+        ``(low, high)`` in [0, 1].
+    """
+    if n <= 0:
+        return math.nan, math.nan
+    if not 0 <= successes <= n:
+        raise ValueError(f"successes={successes} outside [0, n={n}]")
+    p = successes / n
+    z2 = z * z
+    denom = 1.0 + z2 / n
+    center = (p + z2 / (2 * n)) / denom
+    half = z / denom * math.sqrt(p * (1 - p) / n + z2 / (4 * n * n))
+    return max(0.0, center - half), min(1.0, center + half)
+
+
+def one_line(text: str) -> str:
+    """Collapse whitespace to single spaces and cut to ``MAX_REASON_CHARS``."""
+    return " ".join(str(text).split())[:MAX_REASON_CHARS]
+
+
+def _reduce(value: object, how: str) -> float | None:
+    """Reduce a scalar or array info value to one float (``None`` when empty or not numeric)."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if arr.size == 0:
+        return None
+    return float({"sum": np.sum, "max": np.max, "mean": np.mean}[how](arr))
+
+
+@dataclass
+class EpisodeTracker:
+    """Accumulates one episode's step ``info`` dicts into an ``episodes.csv`` row.
+
+    Missing info keys give NaN, never an error. ``policy_dt`` [s] converts the step index of the
+    first success into ``time_to_success_s``.
+    """
+
+    policy_dt: float
+    length: int = 0
+    success: bool = False
+    first_success_step: int | None = None
+    failure_reason: str | None = None
+    _energy: list[float] = field(default_factory=list)
+    _peak_torque: list[float] = field(default_factory=list)
+    _peak_force: list[float] = field(default_factory=list)
+    _pose_error: list[float] = field(default_factory=list)
+
+    @property
+    def done(self) -> bool:
+        """True once the episode ended (``finish`` was called)."""
+        return self.failure_reason is not None
+
+    def update(self, info: Mapping[str, object]) -> None:
+        """Record the ``info`` of one env step."""
+        self.length += 1
+        self.success = bool(info.get("is_success", False))
+        if self.success and self.first_success_step is None:
+            self.first_success_step = self.length
+        for key, how, store in (
+            ("energy_j", "sum", self._energy),
+            ("peak_torque_nm", "max", self._peak_torque),
+            ("peak_contact_force_n", "max", self._peak_force),
+            ("pose_error_m", "mean", self._pose_error),
+        ):
+            if key in info and (value := _reduce(info[key], how)) is not None:
+                store.append(value)
+
+    def finish(self, reason: str) -> None:
+        """End the episode: ``reason`` is "timeout", "terminated", "unstable: …" or "exception: …".
+
+        An episode that ended normally while successful gets reason ``""``; one that crashed
+        counts as a failure even if it succeeded earlier (``success_once`` keeps that).
+        """
+        crashed = reason.startswith(("unstable", "exception"))
+        if crashed:
+            self.success = False
+        self.failure_reason = "" if self.success else one_line(reason)
+
+    def row(self) -> dict[str, object]:
+        """Metric columns of the row (the caller adds method, env, value, seed, episode)."""
+        if not self.done:
+            raise RuntimeError("row() before finish()")
+        step = self.first_success_step
+        return {
+            "success": int(self.success),
+            "success_once": int(step is not None),
+            "length": self.length,
+            "time_to_success_s": math.nan if step is None else step * self.policy_dt,
+            "energy_j": math.fsum(self._energy) if self._energy else math.nan,
+            "peak_torque_nm": float(np.max(self._peak_torque)) if self._peak_torque else math.nan,
+            "peak_contact_force_n": (
+                float(np.max(self._peak_force)) if self._peak_force else math.nan
+            ),
+            "mean_pose_error_m": float(np.mean(self._pose_error)) if self._pose_error else math.nan,
+            "failure_reason": self.failure_reason,
+        }
