@@ -66,7 +66,8 @@ class PinocchioArm:
     Call :meth:`update` once per control tick, then read the cached attributes:
     ``pos_ee_world`` (3,) [m], ``rot_ee_world`` (3, 3), ``jacobian`` (6, 7) world-aligned at the
     TCP with rows (linear; angular), ``mass_matrix`` (7, 7) [kg m^2] incl. armature,
-    ``gravity`` (7,) [Nm], ``coriolis_matrix`` (7, 7) [Nm s].
+    ``gravity`` (7,) [Nm], ``nonlinear`` (7,) = C q' + g [Nm], ``coriolis_matrix`` (7, 7)
+    [Nm s] (refreshed only while ``need_coriolis``).
 
     Args:
         xml_path: robot MJCF; defaults to the shipped FR3 + Hand.
@@ -107,22 +108,31 @@ class PinocchioArm:
         self.mass_matrix = np.eye(7)
         self.gravity = np.zeros(7)
         self.coriolis_matrix = np.zeros((7, 7))
+        self.nonlinear = np.zeros(7)
+        self.need_coriolis = True
         self._triu = np.triu_indices(7, 1)
 
     def update(self, q: np.ndarray, dq: np.ndarray) -> None:
-        """Recompute every cached quantity at joint positions ``q`` [rad], velocities ``dq``."""
+        """Recompute every cached quantity at joint positions ``q`` [rad], velocities ``dq``.
+
+        ``coriolis_matrix`` is refreshed only when ``need_coriolis`` is True (the momentum
+        observer needs it; the residual estimator uses ``nonlinear`` = C q' + g).
+        """
         model, data = self.model, self.data
-        pin.computeAllTerms(model, data, q, dq)
+        pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacement(model, data, self._tcp)
         placement = data.oMf[self._tcp]
         self.pos_ee_world = placement.translation.copy()
         self.rot_ee_world = placement.rotation.copy()
         self.jacobian = pin.getFrameJacobian(model, data, self._tcp, pin.LOCAL_WORLD_ALIGNED)
-        mass = data.M.copy()
-        mass[self._triu[1], self._triu[0]] = mass[self._triu]
-        self.mass_matrix = mass
+        upper = pin.crba(model, data, q)
+        mass = self.mass_matrix
+        mass[:] = upper
+        mass[self._triu[1], self._triu[0]] = upper[self._triu]
         self.gravity = pin.computeGeneralizedGravity(model, data, q).copy()
-        self.coriolis_matrix = pin.computeCoriolisMatrix(model, data, q, dq).copy()
+        self.nonlinear = pin.nonLinearEffects(model, data, q, dq).copy()
+        if self.need_coriolis:
+            self.coriolis_matrix = pin.computeCoriolisMatrix(model, data, q, dq).copy()
 
     def joint_friction(self, dq: np.ndarray) -> np.ndarray:
         """Joint friction torque [Nm] that the torque sensor does NOT see, for the residual.

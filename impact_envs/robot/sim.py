@@ -87,6 +87,7 @@ class FrankaSim:
         self._tau_bias = np.zeros(7)
         self._fric_type = int(mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF)
         self.tau_applied = np.zeros(7)
+        self._fric_buffer = np.zeros(self.model.nv)
 
     def _classify_geoms(self, object_bodies: tuple[str, ...]) -> np.ndarray:
         m = self.model
@@ -131,22 +132,25 @@ class FrankaSim:
         ``M(q) q'' + C q' + g = tau_measured + tau_ext`` holds with the armature in M.
         """
         d, n = self.data, self.noise
-        q = d.qpos[self.arm_qpos] + n.q_std_rad * rng.standard_normal(7)
-        dq = d.qvel[self.arm_dof] + n.dq_std_rad_s * rng.standard_normal(7)
-        tau = self.true_joint_torque() + self._tau_bias + n.tau_std_nm * rng.standard_normal(7)
+        z = rng.standard_normal(21)
+        q = d.qpos[self.arm_qpos] + n.q_std_rad * z[:7]
+        dq = d.qvel[self.arm_dof] + n.dq_std_rad_s * z[7:14]
+        tau = self.true_joint_torque()
+        tau += self._tau_bias
+        tau += n.tau_std_nm * z[14:]
         return q, dq, tau
 
     def true_joint_torque(self) -> np.ndarray:
-        """Noise-free link-side joint torque of the last step [Nm]."""
+        """Noise-free link-side joint torque of the last step [Nm] (a new array)."""
         d = self.data
         tau = d.qfrc_actuator[self.arm_dof] + d.qfrc_damper[self.arm_dof]
         nefc = d.nefc
         if nefc:
             rows = np.flatnonzero(d.efc_type[:nefc] == self._fric_type)
-            if rows.size:
-                fric = np.zeros(self.model.nv)
-                np.add.at(fric, d.efc_id[rows], d.efc_force[rows])
-                tau = tau + fric[self.arm_dof]
+            fric = self._fric_buffer
+            fric[:] = 0.0
+            fric[d.efc_id[rows]] = d.efc_force[rows]
+            tau += fric[self.arm_dof]
         return tau
 
     def gripper_width(self) -> float:
