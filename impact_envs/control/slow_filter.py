@@ -1,0 +1,89 @@
+"""Clipped first-order filter of the external wrench (the internal model's training target).
+
+Paper: w_slow <- w_slow + eta clip(w_ext - w_slow). The table gives eta in 1/s (force 2.0,
+torque 1.0), so per 1 ms tick the gain is eta * dt:
+
+    w_slow[k+1] = w_slow[k] + eta * dt * clip(w_ext[k] - w_slow[k], -c, c)   (per axis)
+
+For a step of size A > c on one axis this is a ramp at the maximum slew eta * c (20 N/s for
+force) until the gap reaches c, then an exponential with time constant ~1/eta (0.5 s force).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from impact_envs.control.config import SlowWrenchConfig
+
+
+class SlowWrenchFilter:
+    """Per-axis clipped low-pass; also reports the slow-wrench rate.
+
+    Attributes:
+        wrench_slow_world: w_slow (6,) [N, Nm], world frame, robot-on-environment sign.
+        rate_world: dw_slow/dt of the last update (6,) [N/s, Nm/s].
+        slow_rate: |dw_slow/dt|_force (Euclidean norm of the three force components) divided by
+            the largest per-axis force slew eta_f * c_f; dimensionless, 0 when settled, 1 when
+            one force axis slews at its maximum (up to sqrt(3) if all three do).
+    """
+
+    def __init__(self, config: SlowWrenchConfig, dt_s: float) -> None:
+        """Create the filter for control period ``dt_s`` [s]."""
+        self.config = config
+        self.dt_s = dt_s
+        f, t = config.rate_force_per_s, config.rate_torque_per_s
+        self.eta_per_s = np.array([f, f, f, t, t, t])
+        self.gain = self.eta_per_s * dt_s
+        cf, ct = config.clip_force_n, config.clip_torque_nm
+        self.clip = np.array([cf, cf, cf, ct, ct, ct])
+        self._inv_max_force_slew = 1.0 / config.max_force_slew_n_per_s
+        self.wrench_slow_world = np.zeros(6)
+        self.rate_world = np.zeros(6)
+        self.slow_rate = 0.0
+        self._delta = np.zeros(6)
+
+    def reset(self, wrench_slow_world: np.ndarray | None = None) -> None:
+        """Set w_slow (default 0) and zero the rate."""
+        if wrench_slow_world is None:
+            self.wrench_slow_world.fill(0.0)
+        else:
+            self.wrench_slow_world[:] = wrench_slow_world
+        self.rate_world.fill(0.0)
+        self.slow_rate = 0.0
+
+    def update(self, wrench_ext_world: np.ndarray) -> np.ndarray:
+        """Advance one tick toward ``wrench_ext_world`` (6,) and return w_slow (6,)."""
+        d = self._delta
+        np.subtract(wrench_ext_world, self.wrench_slow_world, out=d)
+        np.minimum(d, self.clip, out=d)
+        np.maximum(d, -self.clip, out=d)
+        np.multiply(self.eta_per_s, d, out=self.rate_world)
+        d *= self.gain
+        self.wrench_slow_world += d
+        fx, fy, fz = self.rate_world[:3].tolist()
+        self.slow_rate = math.sqrt(fx * fx + fy * fy + fz * fz) * self._inv_max_force_slew
+        return self.wrench_slow_world
+
+
+def step_response_time_s(step_n: float, target_fraction: float, config: SlowWrenchConfig) -> float:
+    """Continuous-time time for a force-axis step of ``step_n`` [N] to reach a fraction of it.
+
+    Ramp at eta c until the gap equals c, then exponential: gap(t) = c exp(-eta (t - t_ramp)).
+
+    Args:
+        step_n: Step size A [N] (> 0).
+        target_fraction: Fraction of A to reach, in (0, 1).
+        config: Filter settings (force axis).
+
+    Returns:
+        Time [s] (analytic, continuous-time approximation of the 1 ms recursion).
+    """
+    eta, c = config.rate_force_per_s, config.clip_force_n
+    gap = (1.0 - target_fraction) * step_n
+    ramp_end_gap = min(step_n, c)
+    t_ramp = (step_n - ramp_end_gap) / (eta * c)
+    if gap >= ramp_end_gap:
+        return (step_n - gap) / (eta * c)
+    return t_ramp + math.log(ramp_end_gap / gap) / eta

@@ -1,0 +1,79 @@
+"""Torque saturation and libfranka-style torque-rate limiting."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from impact_envs.control.config import LimitsConfig
+from impact_envs.control.limits import TorqueLimiter, limit_rate, saturate
+from impact_envs.errors import InvalidArgumentError
+
+TAU_MAX = np.array([87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0])
+
+
+def test_limit_rate_clamps_only_large_changes() -> None:
+    last = np.array([0.0, 1.0, -1.0, 5.0, 0.0, 0.0, 0.0])
+    desired = np.array([0.5, 3.0, -4.0, 5.2, -0.99, 1.0, -1.0])
+    out = limit_rate(desired, last, 1.0)
+    np.testing.assert_allclose(out, [0.5, 2.0, -2.0, 5.2, -0.99, 1.0, -1.0])
+
+
+def test_saturate_to_fr3_limits() -> None:
+    tau = np.array([100.0, -100.0, 50.0, -87.0, 13.0, -20.0, 11.9])
+    np.testing.assert_allclose(saturate(tau, TAU_MAX), [87, -87, 50, -87, 12, -12, 11.9])
+
+
+def test_limiter_defaults_are_fr3() -> None:
+    limiter = TorqueLimiter(LimitsConfig(), dt_s=0.001)
+    np.testing.assert_array_equal(limiter.tau_max, TAU_MAX)
+    assert limiter.max_delta_nm == pytest.approx(1.0)
+
+
+def test_limiter_ramps_a_step_at_1nm_per_tick_then_saturates() -> None:
+    limiter = TorqueLimiter(LimitsConfig(), dt_s=0.001)
+    gravity = np.zeros(7)
+    request = np.full(7, 50.0)
+    history = np.array([limiter.apply(request, gravity).copy() for _ in range(60)])
+    np.testing.assert_allclose(history[9, :4], 10.0)  # 10 ticks -> 10 Nm
+    np.testing.assert_allclose(history[49:, :4], 50.0)
+    np.testing.assert_allclose(history[11:, 4:], 12.0)  # wrist saturated at 12 Nm
+    assert np.max(np.abs(np.diff(history, axis=0))) <= 1.0 + 1e-12
+
+
+def test_limiter_rate_limits_command_without_gravity() -> None:
+    limiter = TorqueLimiter(LimitsConfig(), dt_s=0.001)
+    gravity = np.array([0.0, 30.0, 0.0, -20.0, 0.0, 1.0, 0.0])
+    out = limiter.apply(np.zeros(7), gravity)  # gravity passes at once, like libfranka
+    np.testing.assert_allclose(out, gravity)
+
+
+def test_limiter_state_follows_saturated_output() -> None:
+    limiter = TorqueLimiter(LimitsConfig(), dt_s=0.001)
+    for _ in range(200):
+        out = limiter.apply(np.full(7, 200.0), np.zeros(7))
+    np.testing.assert_allclose(out, TAU_MAX)
+    out = limiter.apply(np.zeros(7), np.zeros(7))
+    np.testing.assert_allclose(out, TAU_MAX - 1.0)  # from the saturated value, not from 200
+
+
+def test_limiter_reset() -> None:
+    limiter = TorqueLimiter(LimitsConfig(), dt_s=0.001)
+    limiter.reset(np.full(7, 5.0))
+    np.testing.assert_allclose(limiter.apply(np.zeros(7), np.zeros(7)), 4.0)
+    limiter.reset()
+    np.testing.assert_allclose(limiter.apply(np.full(7, 3.0), np.zeros(7)), 1.0)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"torque_max_nm": (87.0,) * 6},
+        {"torque_max_nm": (87.0,) * 6 + (-1.0,)},
+        {"torque_rate_max_nm_per_s": 0.0},
+        {"torque_rate_max_nm_per_s": float("nan")},
+    ],
+)
+def test_limits_config_validation(kwargs: dict) -> None:
+    with pytest.raises(InvalidArgumentError):
+        LimitsConfig(**kwargs)
