@@ -5,4 +5,16 @@ Importing this package registers the environments, e.g. ``gym.make("IMPACT/Hamme
 
 from __future__ import annotations
 
+from gymnasium.envs.registration import register, registry
+
 __version__ = "0.1.0"
+
+ENV_IDS = ("IMPACT/Hammer-v0",)
+
+_ENTRY_POINTS = {
+    "IMPACT/Hammer-v0": ("impact_envs.envs.hammer:HammerEnv", 600),
+}
+
+for _env_id, (_entry, _steps) in _ENTRY_POINTS.items():
+    if _env_id not in registry:
+        register(id=_env_id, entry_point=_entry, max_episode_steps=_steps)

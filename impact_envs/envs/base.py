@@ -1,0 +1,253 @@
+"""Gymnasium environment base: a 30 Hz policy over a 1 kHz torque controller on MuJoCo.
+
+Each ``step(action)`` interpolates the TCP target from the previous action to the new one
+(linear position, slerp orientation) over 33 or 34 control ticks (exactly 1000 ticks per 30
+steps), runs the controller on *noisy* sensor readings every tick, and applies the torques.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+from gymnasium import spaces
+
+from impact_envs.control.config import ControllerConfig, EstimatorConfig
+from impact_envs.control.controller import ImpactController
+from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
+from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
+from impact_envs.robot.loop import control_tick
+from impact_envs.robot.sim import FrankaSim, SensorNoise
+from impact_envs.tasks.base import Task, refresh_constants
+
+POLICY_HZ = 30
+CONTROL_HZ = 1000
+CONTROLLERS = ("impact", "impedance")
+ESTIMATORS = ("residual", "momentum")
+
+
+def ticks_for_step(k: int) -> int:
+    """Control ticks in policy step ``k``: 33 or 34, summing to exactly 1000 per 30 steps."""
+    return (k + 1) * CONTROL_HZ // POLICY_HZ - k * CONTROL_HZ // POLICY_HZ
+
+
+class ImpactEnv(gym.Env):
+    """Shared machinery of the IMPACT environments; each task subclass documents itself."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": POLICY_HZ}
+
+    @classmethod
+    def make_task(cls) -> Task:
+        """The task this environment runs (subclasses override)."""
+        raise NotImplementedError
+
+    def __init__(
+        self,
+        *,
+        controller: Literal["impact", "impedance"] = "impact",
+        object_mass: float | None = None,
+        task_params: dict[str, float] | None = None,
+        estimator: Literal["residual", "momentum"] = "residual",
+        sensor_noise: bool = True,
+        grasp_force_n: float = 70.0,
+        model_mass_error: float = 0.0,
+        persist_internal_model: bool = False,
+        terminate_on_success: bool = False,
+        render_mode: str | None = None,
+        width: int = 320,
+        height: int = 240,
+        camera: str = "front",
+        controller_config: ControllerConfig | None = None,
+    ) -> None:
+        check_choice("controller", controller, CONTROLLERS)
+        check_choice("estimator", estimator, ESTIMATORS)
+        if render_mode is not None:
+            check_choice("render_mode", render_mode, self.metadata["render_modes"])
+        self.task = task = self.make_task()
+        self.render_mode = render_mode
+        self.controller_mode = controller
+        self.terminate_on_success = bool(terminate_on_success)
+        self.persist_internal_model = bool(persist_internal_model)
+        noise = SensorNoise() if sensor_noise else SensorNoise.off()
+        self.sim = FrankaSim(task.scene_xml, task.object_bodies, grasp_force_n=grasp_force_n,
+                             noise=noise)
+        task.bind(self.sim)
+        self._params = {p.name: p.default for p in task.params}
+        if object_mass is not None:
+            self._params[task.param("object_mass").name] = task.param("object_mass").validate(
+                object_mass)
+        for name, value in (task_params or {}).items():
+            self._params[name] = task.param(name).validate(value)
+        perturbation = ModelPerturbation(link_mass_scale=1.0 + float(model_mass_error))
+        self.dynamics = PinocchioArm(perturbation=perturbation)
+        cfg = controller_config or ControllerConfig(estimator=EstimatorConfig(kind=estimator))
+        self.controller = ImpactController(self.dynamics, cfg, mode=controller)
+        self._camera = camera
+        self._size = (int(height), int(width))
+        self._renderer: mujoco.Renderer | None = None
+        self.action_space = spaces.Box(
+            low=np.concatenate([task.workspace_low, -np.ones(7)]).astype(np.float32),
+            high=np.concatenate([task.workspace_high, np.ones(7)]).astype(np.float32),
+            dtype=np.float32,
+        )
+        self.observation_space = self._make_observation_space()
+        self._step_count = 0
+        self._target_pos = np.zeros(3)
+        self._target_quat = np.array([1.0, 0.0, 0.0, 0.0])
+        self._gripper_cmd = -1.0
+        self._success_once = False
+
+    # ------------------------------------------------------------------ spaces
+    def _make_observation_space(self) -> spaces.Dict:
+        def box(low: float | np.ndarray, high: float | np.ndarray, n: int) -> spaces.Box:
+            return spaces.Box(np.broadcast_to(low, (n,)).astype(np.float32),
+                              np.broadcast_to(high, (n,)).astype(np.float32), dtype=np.float32)
+
+        return spaces.Dict({
+            "ee_pos": box(-2.0, 2.0, 3),
+            "ee_rot6d": box(-1.0, 1.0, 6),
+            "gripper_width": box(0.0, 0.1, 1),
+            "joint_pos": box(self.dynamics.q_lower - 0.1, self.dynamics.q_upper + 0.1, 7),
+            "joint_vel": box(-10.0, 10.0, 7),
+            "object_pos": box(-2.0, 2.0, 3),
+            "object_rot6d": box(-1.0, 1.0, 6),
+            "goal_pos": box(-2.0, 2.0, 3),
+        })
+
+    # ------------------------------------------------------------------ params
+    @property
+    def param_name(self) -> str:
+        """Name of the task's sweep parameter (e.g. ``object_mass``)."""
+        return self.task.param_name
+
+    def set_param(self, name: str, value: float) -> None:
+        """Persistently set a task parameter (used by resets without options)."""
+        self._params[name] = self.task.param(name).validate(value)
+
+    def set_object_mass(self, mass_kg: float) -> None:
+        """Persistently set the object mass [kg]."""
+        self.set_param("object_mass", mass_kg)
+
+    # ------------------------------------------------------------------- reset
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        params = dict(self._params)
+        for name, value in (options or {}).items():
+            params[name] = self.task.param(name).validate(value)
+        sim, rng = self.sim, self.np_random
+        self.task.apply_params(sim, params)
+        refresh_constants(sim)
+        self._episode_params = params
+        q0 = self.task.initialize_episode(sim, rng)
+        sim.reset_robot(q0, 0.04, rng)
+        mujoco.mj_forward(sim.model, sim.data)
+        self.controller.reset(q0, keep_internal_model=self.persist_internal_model)
+        self.dynamics.update(q0, np.zeros(7))
+        self._target_pos = self.dynamics.pos_ee_world.copy()
+        self._target_quat = matrix_to_quat(self.dynamics.rot_ee_world)
+        self._gripper_cmd = -1.0
+        self._step_count = 0
+        self._success_once = False
+        self._q_meas, self._dq_meas, _ = sim.read_sensors(rng)
+        return self._observation(), self._info(success=False, metrics=None)
+
+    # -------------------------------------------------------------------- step
+    def _decode_action(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        a = np.asarray(action, dtype=np.float64).reshape(-1)
+        if a.shape != (10,) or not np.isfinite(a).all():
+            raise InvalidArgumentError(f"action must be 10 finite numbers, got shape {a.shape}")
+        pos = np.clip(a[:3], self.task.workspace_low, self.task.workspace_high)
+        quat = matrix_to_quat(matrix_from_rot6d(a[3:9]))
+        if np.dot(quat, self._target_quat) < 0.0:
+            quat = -quat
+        return pos, quat, float(np.clip(a[9], -1.0, 1.0))
+
+    def step(self, action: np.ndarray):
+        pos1, quat1, gripper = self._decode_action(action)
+        pos0, quat0 = self._target_pos, self._target_quat
+        metrics = self._run_ticks(pos0, quat0, pos1, quat1, gripper)
+        self._target_pos, self._target_quat, self._gripper_cmd = pos1, quat1, gripper
+        self._step_count += 1
+        success = bool(self.task.is_success(self.sim))
+        self._success_once |= success
+        terminated = bool(success and self.terminate_on_success)
+        return self._observation(), float(success), terminated, False, self._info(success, metrics)
+
+    def _run_ticks(self, pos0, quat0, pos1, quat1, gripper: float) -> dict[str, float]:
+        sim, ctrl, rng, task = self.sim, self.controller, self.np_random, self.task
+        n = ticks_for_step(self._step_count)
+        dt = sim.dt
+        energy = peak_tau = peak_robot = peak_obj = 0.0
+        for i in range(1, n + 1):
+            alpha = i / n
+            pos = pos0 + alpha * (pos1 - pos0)
+            quat = slerp(quat0, quat1, alpha)
+            task.before_tick(sim, float(sim.data.time))
+            q, dq = control_tick(sim, ctrl, rng, pos, quat, gripper)
+            qd = sim.data.qvel[sim.arm_dof]
+            energy += abs(float(np.dot(sim.tau_applied, qd))) * dt
+            peak_tau = max(peak_tau, float(np.abs(sim.tau_applied).max()))
+            if i % 4 == 0 or i == n:
+                f_robot, f_obj = sim.contact_forces()
+                peak_robot = max(peak_robot, f_robot)
+                peak_obj = max(peak_obj, f_obj)
+        sim.check_finite()
+        self._q_meas, self._dq_meas = q, dq
+        return {"energy_j": energy, "peak_torque_nm": peak_tau,
+                "peak_robot_contact_force_n": peak_robot, "peak_object_contact_force_n": peak_obj}
+
+    # ------------------------------------------------------------- observation
+    def _observation(self) -> dict[str, np.ndarray]:
+        dyn = self.dynamics
+        obs = {
+            "ee_pos": dyn.pos_ee_world,
+            "ee_rot6d": rot6d_from_matrix(dyn.rot_ee_world),
+            "gripper_width": np.array([self.sim.gripper_width()]),
+            "joint_pos": self._q_meas,
+            "joint_vel": self._dq_meas,
+        }
+        obs.update(self.task.observation(self.sim))
+        return {k: np.clip(np.asarray(obs[k], dtype=np.float32), space.low, space.high)
+                for k, space in self.observation_space.spaces.items()}
+
+    def _info(self, success: bool, metrics: dict[str, float] | None) -> dict[str, Any]:
+        s = self.controller.signals
+        info: dict[str, Any] = {
+            "is_success": bool(success),
+            "success_once": bool(self._success_once),
+            self.param_name: float(self._episode_params[self.param_name]),
+            "object_mass": float(self._episode_params.get("object_mass", np.nan)),
+            "pose_error_m": float(np.linalg.norm(self._target_pos - self.sim.tcp_pose()[0])),
+            "wrench_ext_world": s.wrench_ext_world.copy(),
+            "wrench_slow_world": s.wrench_slow_world.copy(),
+            "wrench_pred_world": s.wrench_pred_world.copy(),
+            "wrench_ff_world": s.wrench_ff_world.copy(),
+            "wrench_imp_world": s.wrench_imp_world.copy(),
+            "gate_open": bool(s.gate_open),
+            "tau_nm": self.sim.tau_applied.copy(),
+        }
+        m = metrics or {"energy_j": 0.0, "peak_torque_nm": 0.0,
+                        "peak_robot_contact_force_n": 0.0, "peak_object_contact_force_n": 0.0}
+        info.update(m)
+        info["peak_contact_force_n"] = max(m["peak_robot_contact_force_n"],
+                                           m["peak_object_contact_force_n"])
+        info.update(self.task.info(self.sim))
+        return info
+
+    # ----------------------------------------------------------------- render
+    def render(self) -> np.ndarray | None:
+        if self.render_mode != "rgb_array":
+            return None
+        if self._renderer is None:
+            h, w = self._size
+            self._renderer = mujoco.Renderer(self.sim.model, height=h, width=w)
+        self._renderer.update_scene(self.sim.data, camera=self._camera)
+        return self._renderer.render()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None

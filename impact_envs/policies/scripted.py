@@ -1,0 +1,186 @@
+"""Scripted experts: the paper's motion-planning demonstrator as a batched, closed-loop policy.
+
+The pick-and-place expert plans straight-line TCP waypoints (approach, descend, grasp, lift,
+carry, lower, release, retreat) from the observed object and goal poses and moves the target
+toward the current waypoint at a bounded speed. A phase ends when its condition is observed
+(e.g. the object has actually risen) or after a timeout, so under plain impedance a heavy
+object that sags simply runs into the timeout — exactly what a fixed demonstrator would do.
+
+With ``load_compensation`` the expert knows the object mass (privileged) and raises its
+targets by ``m g / K_z`` while holding the object: the overshooting targets a teleoperator
+produces under plain impedance (used for the Augmented-DP demonstrations).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+
+from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
+from impact_envs.errors import InvalidArgumentError
+
+GRAVITY = 9.81
+OPEN, CLOSED = -1.0, 1.0
+
+# phases
+APPROACH, DESCEND, GRASP, LIFT, CARRY, LOWER, RELEASE, RETREAT = range(8)
+
+
+@dataclass(frozen=True)
+class PickPlaceSpec:
+    """Geometry and timing of a pick-and-place task (all heights are TCP z in the world [m]).
+
+    Attributes:
+        grasp_offset_obj: grasp point in the object frame relative to ``object_pos`` [m].
+        grasp_z: TCP height at grasp.
+        hover_z: TCP height above the grasp point before descending.
+        carry_z: TCP height while carrying.
+        place_z: TCP height at release.
+        place_offset_goal: where the grasp point goes relative to ``goal_pos``, expressed along
+            the object's own x axis as it is carried [m].
+        speed_m_s: target speed along straight lines [m/s].
+        reach_tol_m: distance at which a waypoint counts as reached [m].
+        lift_margin_m: the object counts as lifted when its height rose by ``carry_z -
+            grasp_z - lift_margin_m``.
+        stiffness_z_n_per_m: impedance stiffness used for the privileged load compensation.
+        timeouts_steps: per-phase timeouts at 30 Hz.
+    """
+
+    grasp_offset_obj: tuple[float, float, float]
+    grasp_z: float
+    hover_z: float
+    carry_z: float
+    place_z: float
+    place_offset_goal: float = 0.0
+    speed_m_s: float = 0.25
+    reach_tol_m: float = 0.015
+    lift_margin_m: float = 0.04
+    stiffness_z_n_per_m: float = 400.0
+    timeouts_steps: tuple[int, ...] = (90, 60, 18, 300, 150, 120, 15, 10_000)
+
+
+def _yaw_frame(direction: np.ndarray) -> np.ndarray:
+    """TCP rotation pointing down whose x axis is the horizontal ``direction`` (sign chosen
+    to stay near the home yaw, world +x)."""
+    d = np.array([direction[0], direction[1], 0.0])
+    norm = np.linalg.norm(d)
+    d = np.array([1.0, 0.0, 0.0]) if norm < 1e-6 else d / norm
+    if d[0] < 0.0:
+        d = -d
+    z = np.array([0.0, 0.0, -1.0])
+    return np.column_stack([d, np.cross(z, d), z])
+
+
+class PickPlaceExpert:
+    """Batched closed-loop pick-and-place expert implementing the Policy protocol."""
+
+    def __init__(self, spec: PickPlaceSpec, load_compensation: bool = False) -> None:
+        self.spec = spec
+        self.load_compensation = bool(load_compensation)
+        self.reset(1)
+
+    def reset(self, n_envs: int, object_mass_kg: np.ndarray | None = None) -> None:
+        """Start ``n_envs`` new episodes; masses are needed only with load compensation."""
+        if self.load_compensation and object_mass_kg is None:
+            raise InvalidArgumentError("load_compensation needs object_mass_kg in reset()")
+        self.n = int(n_envs)
+        self.mass = (np.zeros(self.n) if object_mass_kg is None
+                     else np.asarray(object_mass_kg, dtype=float).reshape(self.n))
+        self.phase = np.zeros(self.n, dtype=int)
+        self.phase_steps = np.zeros(self.n, dtype=int)
+        self.target = [None] * self.n
+        self.rot = [None] * self.n
+        self.grip = np.full(self.n, OPEN)
+        self.obj_z0 = np.zeros(self.n)
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """Actions (B, 10): TCP target position, rot6d, gripper."""
+        out = np.zeros((self.n, 10), dtype=np.float32)
+        for i in range(self.n):
+            o = {k: np.asarray(v[i], dtype=float) for k, v in obs.items()}
+            out[i] = self._act_one(i, o)
+        return out
+
+    # ------------------------------------------------------------------ helpers
+    def _grasp_point(self, o: dict[str, np.ndarray]) -> np.ndarray:
+        rot = matrix_from_rot6d(o["object_rot6d"])
+        return o["object_pos"] + rot @ np.asarray(self.spec.grasp_offset_obj)
+
+    def _waypoint(self, i: int, o: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        s, phase = self.spec, self.phase[i]
+        obj_rot = matrix_from_rot6d(o["object_rot6d"])
+        if phase <= GRASP:
+            g = self._grasp_point(o) if phase < GRASP else self.target[i]
+            z = {APPROACH: s.hover_z, DESCEND: s.grasp_z, GRASP: s.grasp_z}[phase]
+            return np.array([g[0], g[1], z]), _yaw_frame(obj_rot[:, 0])
+        goal_rot = _yaw_frame(np.array([1.0, 0.0, 0.0]))
+        sign = 1.0 if obj_rot[0, 0] >= 0.0 else -1.0
+        goal_xy = o["goal_pos"][:2] + np.array([sign * s.place_offset_goal, 0.0])
+        if phase == LIFT:
+            return np.array([self.target[i][0], self.target[i][1], s.carry_z]), self.rot[i]
+        if phase == CARRY:
+            return np.array([goal_xy[0], goal_xy[1], s.carry_z]), goal_rot
+        if phase in (LOWER, RELEASE):
+            return np.array([goal_xy[0], goal_xy[1], s.place_z]), goal_rot
+        return np.array([self.target[i][0], self.target[i][1], s.carry_z]), goal_rot
+
+    def _phase_done(self, i: int, o: dict[str, np.ndarray], waypoint: np.ndarray) -> bool:
+        s, phase = self.spec, self.phase[i]
+        reached = (np.linalg.norm(self.target[i] - waypoint) < 1e-6
+                   and np.linalg.norm(o["ee_pos"] - waypoint) < s.reach_tol_m)
+        if phase == GRASP:
+            return self.phase_steps[i] >= 12 and float(o["gripper_width"][0]) < 0.07
+        if phase == LIFT:
+            return o["object_pos"][2] - self.obj_z0[i] > s.carry_z - s.grasp_z - s.lift_margin_m
+        if phase == RELEASE:
+            return self.phase_steps[i] >= s.timeouts_steps[RELEASE]
+        return bool(reached)
+
+    def _act_one(self, i: int, o: dict[str, np.ndarray]) -> np.ndarray:
+        s = self.spec
+        if self.target[i] is None:
+            self.target[i] = o["ee_pos"].copy()
+            self.rot[i] = matrix_from_rot6d(o["ee_rot6d"])
+        waypoint, rot = self._waypoint(i, o)
+        step = s.speed_m_s / 30.0
+        delta = waypoint - self.target[i]
+        dist = np.linalg.norm(delta)
+        self.target[i] = waypoint.copy() if dist <= step else self.target[i] + delta * step / dist
+        self.rot[i] = rot
+        self.phase_steps[i] += 1
+        timeout = self.phase_steps[i] >= s.timeouts_steps[self.phase[i]]
+        if self.phase[i] < RETREAT and (self._phase_done(i, o, waypoint) or timeout):
+            self._advance(i, o)
+        return self._emit(i)
+
+    def _advance(self, i: int, o: dict[str, np.ndarray]) -> None:
+        self.phase[i] += 1
+        self.phase_steps[i] = 0
+        if self.phase[i] == GRASP:
+            self.grip[i] = CLOSED
+        elif self.phase[i] == LIFT:
+            self.obj_z0[i] = o["object_pos"][2]
+        elif self.phase[i] == RELEASE:
+            self.grip[i] = OPEN
+
+    def _emit(self, i: int) -> np.ndarray:
+        target = self.target[i].copy()
+        holding = LIFT <= self.phase[i] <= LOWER
+        if self.load_compensation and holding:
+            target[2] += self.mass[i] * GRAVITY / self.spec.stiffness_z_n_per_m
+        return np.concatenate([target, rot6d_from_matrix(self.rot[i]), [self.grip[i]]])
+
+
+def make_expert(env_id: str, load_compensation: bool = False) -> PickPlaceExpert:
+    """The scripted expert of a registered IMPACT env id."""
+    import impact_envs  # noqa: F401  (registers the envs)
+
+    try:
+        spec = gym.spec(env_id)
+    except gym.error.Error as exc:
+        ids = sorted(k for k in gym.registry if k.startswith("IMPACT/"))
+        raise InvalidArgumentError(f"unknown env {env_id!r}; valid: {', '.join(ids)}") from exc
+    env_cls = gym.envs.registration.load_env_creator(spec.entry_point)
+    return env_cls.make_task().make_expert(load_compensation=load_compensation)

@@ -1,0 +1,126 @@
+"""Task side of an environment (dm_control style): randomization, observation, success, expert.
+
+A task knows its scene file, its objects and its varying physical parameters; the robot side
+(``robot/sim.py``) knows bodies, sensors and contacts; ``envs/base.py`` combines the two.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from impact_envs.errors import InvalidArgumentError
+from impact_envs.policies.protocol import Policy
+from impact_envs.robot.sim import FrankaSim
+
+
+@dataclass(frozen=True)
+class TaskParam:
+    """A physical parameter a task varies (the evaluation sweep axis is the first one).
+
+    Attributes:
+        name: key used in ``reset(options={name: value})``, env kwargs and ``info``.
+        default: nominal value.
+        low, high: valid range (inclusive).
+        unit: unit string for plots and docs.
+    """
+
+    name: str
+    default: float
+    low: float
+    high: float
+    unit: str
+
+    def validate(self, value: float) -> float:
+        """Return ``value`` as float, or raise a one-line error naming the valid range."""
+        try:
+            v = float(value)
+        except (TypeError, ValueError) as exc:
+            raise InvalidArgumentError(f"{self.name} must be a number, got {value!r}") from exc
+        if not (np.isfinite(v) and self.low <= v <= self.high):
+            raise InvalidArgumentError(
+                f"{self.name}={value!r} out of range; valid: {self.low} to {self.high} {self.unit}"
+            )
+        return v
+
+
+class BodyMass:
+    """Sets a body's mass from its nominal value, scaling rotational inertia by the same ratio.
+
+    Always derived from the nominal (never compounded); call :func:`refresh_constants` after.
+    """
+
+    def __init__(self, model: mujoco.MjModel, body: str) -> None:
+        self.id = model.body(body).id
+        self.nominal_mass = float(model.body_mass[self.id])
+        self.nominal_inertia = model.body_inertia[self.id].copy()
+
+    def set(self, model: mujoco.MjModel, mass_kg: float) -> None:
+        """Write mass [kg] and inertia [kg m^2] (COM fixed: uniform density scaling)."""
+        model.body_mass[self.id] = mass_kg
+        model.body_inertia[self.id] = self.nominal_inertia * (mass_kg / self.nominal_mass)
+
+
+def refresh_constants(sim: FrankaSim) -> None:
+    """Recompute derived constants after a model change (``mj_setConst`` resets qpos)."""
+    mujoco.mj_setConst(sim.model, sim.data)
+    mujoco.mj_resetData(sim.model, sim.data)
+
+
+class Task(ABC):
+    """Base class of IMPACT tasks."""
+
+    name: str
+    scene_xml: str
+    object_bodies: tuple[str, ...]
+    params: tuple[TaskParam, ...]
+    max_episode_steps: int
+    workspace_low: np.ndarray
+    workspace_high: np.ndarray
+
+    @property
+    def param_name(self) -> str:
+        """The sweep axis (first parameter)."""
+        return self.params[0].name
+
+    def param(self, name: str) -> TaskParam:
+        """The parameter called ``name`` or a one-line error naming the valid ones."""
+        for p in self.params:
+            if p.name == name:
+                return p
+        valid = ", ".join(p.name for p in self.params)
+        raise InvalidArgumentError(f"unknown parameter {name!r} for {self.name}; valid: {valid}")
+
+    @abstractmethod
+    def bind(self, sim: FrankaSim) -> None:
+        """Look up ids and nominal values in the compiled scene (called once)."""
+
+    @abstractmethod
+    def apply_params(self, sim: FrankaSim, values: dict[str, float]) -> None:
+        """Write physical parameters into the model (before the state is placed)."""
+
+    @abstractmethod
+    def initialize_episode(self, sim: FrankaSim, rng: np.random.Generator) -> np.ndarray:
+        """Randomize and place objects; return the initial arm configuration [rad]."""
+
+    @abstractmethod
+    def observation(self, sim: FrankaSim) -> dict[str, np.ndarray]:
+        """Task part of the observation: ``object_pos``, ``object_rot6d``, ``goal_pos``."""
+
+    @abstractmethod
+    def is_success(self, sim: FrankaSim) -> bool:
+        """Whether the task is accomplished in the current state."""
+
+    @abstractmethod
+    def make_expert(self, load_compensation: bool = False) -> Policy:
+        """The scripted expert (acts on batched observations of this task)."""
+
+    def before_tick(self, sim: FrankaSim, time_s: float) -> None:  # noqa: B027
+        """Hook run before every physics tick (e.g. external disturbances). Default: nothing."""
+
+    def info(self, sim: FrankaSim) -> dict[str, float | bool]:
+        """Extra task-specific per-step info. Default: none."""
+        return {}

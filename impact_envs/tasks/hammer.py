@@ -1,0 +1,89 @@
+"""Hammer pick-and-place task: grasp a hammer near its centre of mass, place it in a basket."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from impact_envs.control.lie import rot6d_from_matrix
+from impact_envs.policies.scripted import PickPlaceExpert, PickPlaceSpec
+from impact_envs.robot.ik import HOME_Q
+from impact_envs.robot.sim import FrankaSim
+from impact_envs.tasks.base import BodyMass, Task, TaskParam
+
+HANDLE_HALF_HEIGHT_M = 0.0125
+"""Half thickness of the square handle [m]; the hammer lies flat at this COM height."""
+BASKET_INNER_HALF_M = (0.19, 0.09)
+"""Inner half extents of the basket floor (x, y) [m]."""
+BASKET_WALL_TOP_M = 0.06
+
+
+class HammerTask(Task):
+    """Pick the hammer at its centre of mass and place it inside the basket."""
+
+    name = "hammer"
+    scene_xml = "hammer_scene.xml"
+    object_bodies = ("hammer",)
+    params = (TaskParam("object_mass", 0.2, 0.05, 12.0, "kg"),)
+    max_episode_steps = 600
+    workspace_low = np.array([0.15, -0.45, 0.0])
+    workspace_high = np.array([0.70, 0.45, 0.60])
+
+    hammer_xy_low = np.array([0.36, 0.14])
+    hammer_xy_high = np.array([0.44, 0.22])
+    hammer_yaw_max_rad = np.pi / 6
+    basket_xy_low = np.array([0.38, -0.27])
+    basket_xy_high = np.array([0.44, -0.21])
+
+    def bind(self, sim: FrankaSim) -> None:
+        m = sim.model
+        self.mass = BodyMass(m, "hammer")
+        self.hammer = m.body("hammer").id
+        self.basket = m.body("basket").id
+        self.com_offset = m.body_ipos[self.hammer].copy()
+        joint = m.joint("hammer_free").id
+        self.qpos_adr = int(m.jnt_qposadr[joint])
+        self.dof_adr = int(m.jnt_dofadr[joint])
+
+    def apply_params(self, sim: FrankaSim, values: dict[str, float]) -> None:
+        self.mass.set(sim.model, values["object_mass"])
+
+    def initialize_episode(self, sim: FrankaSim, rng: np.random.Generator) -> np.ndarray:
+        m, d = sim.model, sim.data
+        com_xy = rng.uniform(self.hammer_xy_low, self.hammer_xy_high)
+        yaw = rng.uniform(-self.hammer_yaw_max_rad, self.hammer_yaw_max_rad)
+        c, s = np.cos(yaw), np.sin(yaw)
+        origin_xy = com_xy - np.array([c, s]) * self.com_offset[0]
+        d.qpos[self.qpos_adr:self.qpos_adr + 3] = [*origin_xy, HANDLE_HALF_HEIGHT_M]
+        d.qpos[self.qpos_adr + 3:self.qpos_adr + 7] = [np.cos(yaw / 2), 0, 0, np.sin(yaw / 2)]
+        d.qvel[self.dof_adr:self.dof_adr + 6] = 0.0
+        m.body_pos[self.basket, :2] = rng.uniform(self.basket_xy_low, self.basket_xy_high)
+        return HOME_Q + rng.uniform(-0.03, 0.03, size=7)
+
+    def observation(self, sim: FrankaSim) -> dict[str, np.ndarray]:
+        d = sim.data
+        return {
+            "object_pos": d.xipos[self.hammer].copy(),
+            "object_rot6d": rot6d_from_matrix(d.xmat[self.hammer].reshape(3, 3)),
+            "goal_pos": sim.model.body_pos[self.basket].copy(),
+        }
+
+    def is_success(self, sim: FrankaSim) -> bool:
+        d = sim.data
+        rel = d.xipos[self.hammer] - sim.model.body_pos[self.basket]
+        inside = (abs(rel[0]) < BASKET_INNER_HALF_M[0] and abs(rel[1]) < BASKET_INNER_HALF_M[1]
+                  and rel[2] < BASKET_WALL_TOP_M)
+        return bool(inside and sim.object_finger_contacts("hammer") == 0)
+
+    def info(self, sim: FrankaSim) -> dict[str, float | bool]:
+        return {"is_grasped": sim.object_finger_contacts("hammer") >= 2}
+
+    def make_expert(self, load_compensation: bool = False) -> PickPlaceExpert:
+        spec = PickPlaceSpec(
+            grasp_offset_obj=(0.0, 0.0, 0.0),
+            grasp_z=HANDLE_HALF_HEIGHT_M,
+            hover_z=0.12,
+            carry_z=0.18,
+            place_z=0.045,
+            place_offset_goal=0.07,
+        )
+        return PickPlaceExpert(spec, load_compensation=load_compensation)

@@ -1,0 +1,124 @@
+"""Invariants over every registered IMPACT environment."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import impact_envs
+from impact_envs.errors import InvalidArgumentError
+from impact_envs.policies.protocol import stack_obs
+from impact_envs.policies.scripted import make_expert
+
+ENV_IDS = impact_envs.ENV_IDS
+
+
+def _hold_action(obs: dict[str, np.ndarray]) -> np.ndarray:
+    return np.concatenate([obs["ee_pos"], obs["ee_rot6d"], [-1.0]]).astype(np.float32)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_gymnasium_check_env(env_id):
+    env = gym.make(env_id)
+    check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_sb3_check_env(env_id):
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    env = gym.make(env_id)
+    sb3_check_env(env, warn=False)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+@pytest.mark.parametrize("controller", ["impact", "impedance"])
+def test_same_seed_same_actions_identical_trajectories(env_id, controller):
+    def rollout() -> list[np.ndarray]:
+        env = gym.make(env_id, controller=controller)
+        expert = make_expert(env_id)
+        obs, _ = env.reset(seed=7)
+        expert.reset(1)
+        traj = []
+        for _ in range(40):
+            obs, _, _, _, info = env.step(expert.act(stack_obs([obs]))[0])
+            traj.append(np.concatenate([*obs.values(), info["tau_nm"]]))
+        env.close()
+        return traj
+
+    a, b = rollout(), rollout()
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_observations_finite_and_in_space(env_id):
+    env = gym.make(env_id)
+    obs, info = env.reset(seed=0)
+    assert info["is_success"] is False
+    for _ in range(10):
+        obs, reward, terminated, truncated, info = env.step(_hold_action(obs))
+        assert env.observation_space.contains(obs)
+        assert all(np.isfinite(v).all() for v in obs.values())
+        assert isinstance(reward, float) and isinstance(terminated, bool)
+    for key in ("is_success", "object_mass", "pose_error_m", "energy_j", "peak_torque_nm",
+                "peak_contact_force_n", "wrench_ext_world", "wrench_pred_world", "gate_open"):
+        assert key in info
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_rgb_array_render(env_id):
+    env = gym.make(env_id, render_mode="rgb_array", width=64, height=48)
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.shape == (48, 64, 3) and frame.dtype == np.uint8 and frame.std() > 1.0
+    env.close()
+    env.close()  # closing twice is safe
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_reset_option_sets_parameter_and_mass_is_reported(env_id):
+    env = gym.make(env_id)
+    name = env.unwrapped.param_name
+    _, info = env.reset(seed=0, options={name: 3.0})
+    assert info[name] == 3.0
+    _, info = env.reset(seed=0)  # back to the persistent value
+    assert info[name] == env.unwrapped.task.param(name).default
+    env.close()
+
+
+def test_mass_is_set_from_nominal_not_compounded():
+    env = gym.make("IMPACT/Hammer-v0").unwrapped
+    body = env.task.mass.id
+    for m in (2.0, 5.0, 2.0):
+        env.reset(seed=0, options={"object_mass": m})
+    assert env.sim.model.body_mass[body] == 2.0
+    ratio = env.sim.model.body_inertia[body] / env.task.mass.nominal_inertia
+    np.testing.assert_allclose(ratio, 2.0 / env.task.mass.nominal_mass)
+    assert env.sim.model.body_subtreemass[body] == pytest.approx(2.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"controller": "pid"}, "valid choices: impact, impedance"),
+        ({"estimator": "kalman"}, "valid choices: residual, momentum"),
+        ({"object_mass": -1.0}, "valid: 0.05 to 12.0 kg"),
+        ({"render_mode": "human"}, "valid choices: rgb_array"),
+    ],
+)
+def test_bad_kwargs_give_one_line_errors(kwargs, match):
+    with pytest.raises(InvalidArgumentError, match=match) as err:
+        gym.make("IMPACT/Hammer-v0", **kwargs)
+    assert "\n" not in str(err.value)
+
+
+def test_bad_reset_option():
+    env = gym.make("IMPACT/Hammer-v0")
+    with pytest.raises(InvalidArgumentError, match="valid: object_mass"):
+        env.reset(seed=0, options={"friction": 1.0})
