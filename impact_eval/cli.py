@@ -1,0 +1,157 @@
+"""``impact-eval``: success-vs-parameter sweeps of IMPACT methods, and ``report`` to redraw.
+
+Exit codes: 0 success; 2 bad input (one-line message on stderr, no files created);
+1 the sweep started but could not finish (rerun with ``--resume``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from impact_envs.errors import ImpactError, InvalidArgumentError
+
+PROG = "impact-eval"
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one-line ``InvalidArgumentError``s (exit code 2)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise InvalidArgumentError(f"{message} (see {self.prog} --help)")
+
+
+def sweep_parser() -> argparse.ArgumentParser:
+    """Parser of the sweep command."""
+    p = _Parser(
+        prog=PROG,
+        description="Sweep methods over an env parameter (e.g. object mass); "
+        "writes episodes.csv, summary.csv, run.json and plots/. "
+        f"'{PROG} report DIR' redraws a finished sweep from its CSV.",
+    )
+    p.add_argument("--env", required=True, help="env id, e.g. IMPACT/Hammer-v0")
+    p.add_argument(
+        "--method",
+        required=True,
+        help="comma list: scripted, scripted_impact, "
+        "vanilla_dp, augmented_dp, impact, sb3:<path.zip>",
+    )
+    grid = p.add_mutually_exclusive_group(required=True)
+    grid.add_argument(
+        "--masses",
+        dest="grid",
+        metavar="GRID",
+        help="values of the env's parameter (alias of --param-values): "
+        "start:stop:step (stop included when on the grid) or a comma list",
+    )
+    grid.add_argument("--param-values", dest="grid", metavar="GRID", help="same as --masses")
+    p.add_argument(
+        "--param",
+        default=None,
+        help="name of the swept parameter; must match the env's (default: the env's)",
+    )
+    p.add_argument("--episodes", type=int, default=20, help="episodes per (method, value)")
+    p.add_argument("--out", type=Path, required=True, help="output directory")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="worker processes (default: CPU count; 1 runs in-process)",
+    )
+    p.add_argument(
+        "--envs-per-worker",
+        type=int,
+        default=4,
+        help="envs each worker steps in lockstep with one batched policy call",
+    )
+    p.add_argument("--seed", type=int, default=0, help="base seed of the paired episode seeds")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue OUT: skip (method, value, episode) rows already written",
+    )
+    return p
+
+
+def report_parser() -> argparse.ArgumentParser:
+    """Parser of ``impact-eval report DIR``."""
+    p = _Parser(
+        prog=f"{PROG} report",
+        description="Rewrite summary.csv and plots/ of DIR from DIR/episodes.csv alone.",
+    )
+    p.add_argument("dir", type=Path, help="output directory of a sweep")
+    return p
+
+
+def _print_outputs(out: Path, summary: Path, plots: list[Path]) -> None:
+    """Tell where the results went."""
+    print(f"  episodes: {out / 'episodes.csv'}")
+    print(f"  summary:  {summary}")
+    pngs = ", ".join(p.name for p in plots if p.suffix == ".png")
+    print(f"  plots:    {plots[0].parent}/ ({pngs}; PDFs beside them)" if plots else "")
+
+
+def run_report(argv: Sequence[str]) -> int:
+    """``impact-eval report DIR``."""
+    from impact_eval.report import write_report
+
+    args = report_parser().parse_args(argv)
+    summary, plots = write_report(args.dir)
+    print(f"{PROG}: redrew the report of {args.dir}")
+    _print_outputs(args.dir, summary, plots)
+    return 0
+
+
+def run_sweep_command(argv: Sequence[str]) -> int:
+    """The sweep: validate, then run, then write the summary and plots."""
+    from impact_eval.execute import execute
+    from impact_eval.prepare import SweepRequest, prepare
+
+    a = sweep_parser().parse_args(argv)
+    request = SweepRequest(
+        env_id=a.env,
+        methods=a.method,
+        grid=a.grid,
+        param=a.param,
+        episodes=a.episodes,
+        out=a.out,
+        workers=a.workers,
+        envs_per_worker=a.envs_per_worker,
+        seed=a.seed,
+        resume=a.resume,
+    )
+    plan = prepare(request)
+    t0 = time.perf_counter()
+    result = execute(plan, command=[PROG, *argv], args=vars(a))
+    wall = time.perf_counter() - t0
+    print(
+        f"{PROG}: {result.episodes_run} episodes run ({len(plan.done)} already done, "
+        f"{result.rows} in total) in {wall:.1f} s wall"
+    )
+    _print_outputs(plan.out, result.summary, result.plots)
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Console entry point; returns the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        if argv and argv[0] == "report":
+            return run_report(argv[1:])
+        return run_sweep_command(argv)
+    except ImpactError as exc:
+        from impact_eval.sweep import SweepError
+
+        print(f"{PROG}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 1 if isinstance(exc, SweepError) else 2
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted; rerun with --resume to continue", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

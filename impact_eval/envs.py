@@ -1,0 +1,136 @@
+"""Env look-up and validation: registered ids, the swept parameter, control and policy periods."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import gymnasium as gym
+
+from impact_envs.errors import ImpactError, InvalidArgumentError
+
+DEFAULT_PARAM_NAME = "object_mass"
+"""Parameter swept when the env does not declare ``param_name``."""
+
+DEFAULT_NAMESPACE = "IMPACT"
+
+
+def import_env_module(env_id: str) -> str:
+    """Import the module that registers ``env_id``; returns the id without a ``module:`` prefix.
+
+    ``impact_envs`` is always imported (it registers the ``IMPACT/*`` envs); an id written as
+    ``"package.module:Namespace/Name-v0"`` also imports ``package.module``, as ``gym.make`` does.
+    """
+    importlib.import_module("impact_envs")
+    if ":" not in env_id:
+        return env_id
+    module, bare_id = env_id.split(":", 1)
+    try:
+        importlib.import_module(module)
+    except ImportError as exc:
+        raise InvalidArgumentError(f"cannot import env module {module!r}: {exc}") from None
+    return bare_id
+
+
+def env_choices(bare_id: str) -> list[str]:
+    """Registered ids to suggest: the requested namespace's (or IMPACT's) ids."""
+    namespace = bare_id.split("/", 1)[0] if "/" in bare_id else DEFAULT_NAMESPACE
+    ids = sorted(i for i in gym.registry if i.startswith(f"{namespace}/"))
+    return ids or sorted(i for i in gym.registry if i.startswith(f"{DEFAULT_NAMESPACE}/"))
+
+
+def check_env_id(env_id: str) -> str:
+    """Raise a one-line ``InvalidArgumentError`` unless ``env_id`` is registered; return bare id."""
+    bare_id = import_env_module(env_id)
+    if bare_id not in gym.registry:
+        choices = ", ".join(env_choices(bare_id)) or "(none registered)"
+        raise InvalidArgumentError(f"unknown env id {env_id!r}; valid choices: {choices}")
+    return bare_id
+
+
+def make_env(env_id: str, controller: str) -> gym.Env:
+    """``gym.make(env_id, controller=controller)`` with errors turned into ``ImpactError``."""
+    try:
+        return gym.make(env_id, controller=controller)
+    except ImpactError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - env construction failed: report it in one line
+        msg = " ".join(str(exc).split())[:160]
+        raise InvalidArgumentError(
+            f"cannot make {env_id} with controller={controller!r}: {type(exc).__name__}: {msg}"
+        ) from None
+
+
+@dataclass(frozen=True)
+class EnvInfo:
+    """What the sweep needs to know about an env, read once in the parent."""
+
+    env_id: str
+    param_name: str
+    policy_dt: float
+    control_dt: float | None
+    max_episode_steps: int | None
+    spec_json: str
+
+
+def describe_env(env: gym.Env) -> EnvInfo:
+    """Read parameter name, periods [s] and the serialised spec of a built env."""
+    base = env.unwrapped
+    param_name = getattr(base, "param_name", None) or DEFAULT_PARAM_NAME
+    policy_dt = getattr(base, "policy_dt", None) or getattr(base, "dt", None)
+    if policy_dt is None and env.metadata.get("render_fps"):
+        policy_dt = 1.0 / float(env.metadata["render_fps"])
+    if policy_dt is None or not math.isfinite(float(policy_dt)) or policy_dt <= 0:
+        policy_dt = math.nan
+    control_dt = getattr(base, "control_dt", None) or getattr(
+        getattr(base, "sim", None), "dt", None
+    )
+    try:
+        spec_json = env.spec.to_json() if env.spec is not None else "null"
+    except (ValueError, TypeError):
+        spec_json = json.dumps(
+            {"id": env.spec.id if env.spec else None, "note": "not serialisable"}
+        )
+    return EnvInfo(
+        env_id=env.spec.id if env.spec is not None else "",
+        param_name=str(param_name),
+        policy_dt=float(policy_dt),
+        control_dt=None if control_dt is None else float(control_dt),
+        max_episode_steps=env.spec.max_episode_steps if env.spec is not None else None,
+        spec_json=spec_json,
+    )
+
+
+def check_param(info: EnvInfo, requested: str | None) -> None:
+    """Raise unless ``requested`` (``--param``) is ``None`` or the env's parameter name."""
+    if requested is not None and requested != info.param_name:
+        raise InvalidArgumentError(
+            f"unknown parameter {requested!r} for {info.env_id}; valid choices: {info.param_name}"
+        )
+
+
+def probe_values(env: gym.Env, param_name: str, values: Sequence[float]) -> None:
+    """Reset once per value: the env must accept it and report it back in ``info``.
+
+    Raises:
+        InvalidArgumentError: the env rejected a value or reported a different one.
+    """
+    for value in values:
+        try:
+            _, info = env.reset(seed=0, options={param_name: value})
+        except Exception as exc:  # noqa: BLE001 - a rejected value is bad input
+            msg = " ".join(str(exc).split())[:160]
+            raise InvalidArgumentError(
+                f"{param_name}={value} rejected by {env.spec.id if env.spec else env}: {msg}"
+            ) from None
+        reported = info.get(param_name)
+        if reported is not None and not math.isclose(
+            float(reported), value, rel_tol=1e-6, abs_tol=1e-9
+        ):
+            raise InvalidArgumentError(
+                f"env ignored {param_name}={value} (info reports {reported}); "
+                "does it read reset(options=...)?"
+            )

@@ -1,0 +1,181 @@
+"""Method registry: method name -> (policy factory, low-level controller).
+
+Factories import their dependencies on use, so the registry can be listed (and the sweep
+machinery tested) without the scripted experts, diffusion policies or Stable-Baselines3.
+
+| method            | policy                                   | controller  |
+|-------------------|------------------------------------------|-------------|
+| `scripted`        | scripted expert                          | `impedance` |
+| `scripted_impact` | scripted expert                          | `impact`    |
+| `vanilla_dp`      | DP checkpoint `<env>/vanilla`            | `impedance` |
+| `augmented_dp`    | DP checkpoint `<env>/augmented`          | `impedance` |
+| `impact`          | DP checkpoint `<env>/vanilla`            | `impact`    |
+| `sb3:<path.zip>`  | SB3 PPO / SAC / TD3 policy, deterministic | `impedance` |
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_envs.policies.protocol import Policy
+
+CONTROLLERS: tuple[str, ...] = ("impedance", "impact")
+"""Values of the env's ``controller`` kwarg."""
+
+CHECKPOINTS_ENV_VAR = "IMPACT_CHECKPOINTS"
+"""Environment variable overriding the shipped checkpoint root ``impact_envs/checkpoints``."""
+
+SB3_PREFIX = "sb3:"
+
+PolicyFactory = Callable[[str, gym.Env], Policy]
+"""``factory(env_id, env) -> Policy``; ``env`` is a built env of this method's controller."""
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """How to evaluate one method: which policy, on which controller."""
+
+    name: str
+    controller: str
+    build: PolicyFactory
+    description: str
+
+
+_REGISTRY: dict[str, MethodSpec] = {}
+
+
+def register_method(spec: MethodSpec) -> None:
+    """Add (or replace) a method; used by the built-ins below and by plugins/tests."""
+    if spec.controller not in CONTROLLERS:
+        raise InvalidArgumentError(
+            f"invalid controller {spec.controller!r}; valid choices: {', '.join(CONTROLLERS)}"
+        )
+    _REGISTRY[spec.name] = spec
+
+
+def method_choices() -> list[str]:
+    """Valid method names, including the ``sb3:<path.zip>`` pattern."""
+    return [*_REGISTRY, f"{SB3_PREFIX}<path.zip>"]
+
+
+def resolve_method(name: str) -> MethodSpec:
+    """Look a method up; ``sb3:<path>`` builds a spec on the fly."""
+    if name.startswith(SB3_PREFIX) and len(name) > len(SB3_PREFIX):
+        path = name[len(SB3_PREFIX) :]
+        return MethodSpec(name, "impedance", lambda _id, env: load_sb3(path, env), "SB3 policy")
+    if name not in _REGISTRY:
+        raise InvalidArgumentError(
+            f"unknown method {name!r}; valid choices: {', '.join(method_choices())}"
+        )
+    return _REGISTRY[name]
+
+
+def env_short_name(env_id: str) -> str:
+    """``"IMPACT/Hammer-v0"`` (or ``"mod:IMPACT/Hammer-v0"``) -> ``"hammer"``."""
+    name = env_id.rsplit(":", 1)[-1].rsplit("/", 1)[-1]
+    return re.sub(r"-v\d+$", "", name).lower()
+
+
+def checkpoint_dir(env_id: str, variant: str) -> Path:
+    """Directory of the shipped ``variant`` ("vanilla" | "augmented") DP checkpoint of an env.
+
+    The root is ``$IMPACT_CHECKPOINTS`` if set, else ``impact_envs/checkpoints``.
+
+    Raises:
+        CheckpointError: the directory does not exist (one-line message).
+    """
+    root = os.environ.get(CHECKPOINTS_ENV_VAR)
+    if root is None:
+        import impact_envs
+
+        root = str(Path(impact_envs.__file__).parent / "checkpoints")
+    path = Path(root) / env_short_name(env_id) / variant
+    if not path.is_dir():
+        raise CheckpointError(
+            f"no {variant} checkpoint for {env_id}: {path} does not exist "
+            f"(train one with impact-train or set ${CHECKPOINTS_ENV_VAR})"
+        )
+    return path
+
+
+def _build_scripted(env_id: str, env: gym.Env) -> Policy:
+    """Scripted expert of the env, without load compensation (the controller's job)."""
+    try:
+        from impact_envs.policies.scripted import make_expert
+
+        return make_expert(env_id, load_compensation=False)
+    except ImportError as exc:
+        raise InvalidArgumentError(f"no scripted experts available: {exc}") from None
+
+
+def _dp_factory(variant: str) -> PolicyFactory:
+    """Factory loading the ``variant`` diffusion-policy checkpoint of the env."""
+
+    def build(env_id: str, env: gym.Env) -> Policy:
+        path = checkpoint_dir(env_id, variant)
+        try:
+            from impact_envs.policies.diffusion.policy import DiffusionPolicy
+
+            return DiffusionPolicy.load(path)
+        except Exception as exc:  # noqa: BLE001 - any load failure means a corrupt checkpoint
+            msg = " ".join(str(exc).split())[:160]
+            raise CheckpointError(
+                f"cannot load {variant} checkpoint {path}: {type(exc).__name__}: {msg}"
+            ) from None
+
+    return build
+
+
+class SB3Policy:
+    """Stable-Baselines3 model behind the batched ``Policy`` protocol (deterministic actions)."""
+
+    def __init__(self, model: object) -> None:
+        self.model = model
+
+    def reset(self, n_envs: int) -> None:
+        """SB3 feed-forward policies are stateless: nothing to clear."""
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """Deterministic actions ``(B, action_dim)`` for a batched observation."""
+        action, _ = self.model.predict(obs, deterministic=True)  # type: ignore[attr-defined]
+        return np.asarray(action, dtype=np.float32)
+
+
+def load_sb3(path: str, env: gym.Env) -> SB3Policy:
+    """Load an SB3 zip with ``PPO.load``, ``SAC.load``, ``TD3.load`` in turn (CPU)."""
+    if not (Path(path).is_file() or Path(path + ".zip").is_file()):
+        raise CheckpointError(f"SB3 checkpoint {path} does not exist")
+    import stable_baselines3 as sb3
+
+    errors = []
+    for cls in (sb3.PPO, sb3.SAC, sb3.TD3):
+        try:
+            model = cls.load(path, device="cpu")
+        except Exception as exc:  # noqa: BLE001 - try the next algorithm
+            errors.append(f"{cls.__name__}: {type(exc).__name__}")
+            continue
+        if model.action_space.shape != env.action_space.shape:
+            raise CheckpointError(
+                f"SB3 checkpoint {path} has action shape {model.action_space.shape}, "
+                f"env has {env.action_space.shape}"
+            )
+        return SB3Policy(model)
+    raise CheckpointError(f"cannot load SB3 checkpoint {path} ({'; '.join(errors)})")
+
+
+for _spec in (
+    MethodSpec("scripted", "impedance", _build_scripted, "scripted expert, impedance control"),
+    MethodSpec("scripted_impact", "impact", _build_scripted, "scripted expert, IMPACT control"),
+    MethodSpec("vanilla_dp", "impedance", _dp_factory("vanilla"), "Vanilla DP, impedance"),
+    MethodSpec("augmented_dp", "impedance", _dp_factory("augmented"), "Augmented DP, impedance"),
+    MethodSpec("impact", "impact", _dp_factory("vanilla"), "Vanilla DP + IMPACT controller"),
+):
+    register_method(_spec)

@@ -1,0 +1,204 @@
+"""Figures of a sweep, drawn from ``summary.csv`` (matplotlib ``Agg``, PNG + PDF).
+
+1. ``success_surface``: 3-D bars, x = parameter (object mass), y = method, z = success rate
+   (the layout of the paper's simulation-benchmark figure).
+2. ``success_vs_<param>``: success rate with Wilson 95 % bands, one line per method.
+3. ``energy_vs_<param>``: joint mechanical energy per episode, mean ± std.
+4. ``safety_vs_<param>``: peak contact force and peak joint torque, means.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+METHOD_ORDER = ("scripted", "scripted_impact", "vanilla_dp", "augmented_dp", "impact")
+METHOD_LABELS = {
+    "scripted": "Scripted + impedance",
+    "scripted_impact": "Scripted + IMPACT ctrl",
+    "vanilla_dp": "Vanilla DP",
+    "augmented_dp": "Augmented DP",
+    "impact": "IMPACT (ours)",
+}
+PARAM_UNITS = {"mass": "kg", "force": "N", "length": "m", "stiffness": "N/m", "time": "s"}
+FORMATS = ("png", "pdf")
+MARKERS = ("o", "s", "^", "D", "v", "P", "X")
+LINESTYLES = ("-", "--", "-.", ":")
+"""Markers and dashes cycle per method so that coinciding curves stay distinguishable."""
+
+
+def ordered_methods(methods: list[str]) -> list[str]:
+    """Known methods in the paper's order, then any others alphabetically."""
+    known = [m for m in METHOD_ORDER if m in methods]
+    return known + sorted(m for m in methods if m not in METHOD_ORDER)
+
+
+def method_label(method: str) -> str:
+    """Legend text of a method (``sb3:dir/ppo.zip`` -> ``SB3 ppo``)."""
+    if method.startswith("sb3:"):
+        return f"SB3 {Path(method[4:]).stem}"
+    return METHOD_LABELS.get(method, method)
+
+
+def param_label(param_name: str) -> str:
+    """Axis label with unit, e.g. ``object_mass`` -> ``object mass [kg]``."""
+    unit = next((u for k, u in PARAM_UNITS.items() if param_name.endswith(k)), None)
+    text = param_name.replace("_", " ")
+    return f"{text} [{unit}]" if unit else text
+
+
+def _colors(methods: list[str]) -> dict[str, tuple]:
+    """Stable colour per method (tab10 by position in the paper's order)."""
+    cmap = plt.get_cmap("tab10")
+    return {m: cmap(i % 10) for i, m in enumerate(ordered_methods(methods))}
+
+
+def _save(fig: plt.Figure, out_dir: Path, stem: str) -> list[Path]:
+    """Save ``fig`` as PNG and PDF; returns the paths."""
+    paths = []
+    for fmt in FORMATS:
+        path = out_dir / f"{stem}.{fmt}"
+        fig.savefig(path, dpi=150, bbox_inches="tight")
+        paths.append(path)
+    plt.close(fig)
+    return paths
+
+
+def _bar_width(values: np.ndarray) -> float:
+    """Bar depth along the parameter axis: 70 % of the smallest grid spacing."""
+    gaps = np.diff(np.unique(values))
+    return 0.7 * float(gaps.min()) if gaps.size else 0.5
+
+
+def plot_surface(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
+    """3-D bar chart: parameter × method × success rate (one ``bar3d`` call, correct depth)."""
+    methods = ordered_methods(summary["method"].unique().tolist())
+    colors = _colors(methods)
+    dx, dy = _bar_width(summary["param_value"].to_numpy(float)), 0.45
+    rows = summary.assign(j=summary["method"].map(methods.index)).sort_values(["j", "param_value"])
+    x = rows["param_value"].to_numpy(float) - dx / 2
+    y = rows["j"].to_numpy(float) - dy / 2
+    fig = plt.figure(figsize=(10, 6))
+    ax = fig.add_subplot(projection="3d")
+    ax.bar3d(
+        x,
+        y,
+        np.zeros(len(x)),
+        dx,
+        dy,
+        rows["success_rate"].to_numpy(float),
+        color=[colors[m] for m in rows["method"]],
+        shade=True,
+        edgecolor="0.25",
+        linewidth=0.15,
+    )
+    ax.set_box_aspect((2.2, 1.1, 0.8))
+    ax.set_xlabel(param_label(str(summary["param_name"].iloc[0])), labelpad=12)
+    ax.set_yticks(range(len(methods)))
+    ax.set_yticklabels(
+        [method_label(m) for m in methods],
+        fontsize=8,
+        verticalalignment="baseline",
+        horizontalalignment="left",
+    )
+    ax.set_ylim(-0.6, len(methods) - 0.4)
+    ax.set_zlabel("success rate", labelpad=4)
+    ax.set_zlim(0, 1)
+    ax.set_zticks([0, 0.25, 0.5, 0.75, 1.0])
+    ax.view_init(elev=28, azim=-58)
+    ax.set_title(
+        f"{summary['env_id'].iloc[0]}: success rate by method and "
+        f"{param_label(str(summary['param_name'].iloc[0]))}",
+        pad=0,
+    )
+    return _save(fig, out_dir, "success_surface")
+
+
+def _lines(
+    ax: plt.Axes,
+    summary: pd.DataFrame,
+    mean: str,
+    low: str | None,
+    high: str | None,
+    band_std: str | None = None,
+) -> None:
+    """One line per method with an optional band (columns ``low``/``high`` or mean ± std)."""
+    methods = ordered_methods(summary["method"].unique().tolist())
+    colors = _colors(methods)
+    for i, method in enumerate(methods):
+        rows = summary[summary["method"] == method].sort_values("param_value")
+        x, y = rows["param_value"].to_numpy(float), rows[mean].to_numpy(float)
+        ax.plot(
+            x,
+            y,
+            marker=MARKERS[i % len(MARKERS)],
+            ls=LINESTYLES[i % len(LINESTYLES)],
+            ms=3.5,
+            lw=1.5,
+            color=colors[method],
+            label=method_label(method),
+        )
+        if low and high:
+            ax.fill_between(x, rows[low], rows[high], color=colors[method], alpha=0.15, lw=0)
+        elif band_std:
+            std = rows[band_std].fillna(0).to_numpy(float)
+            ax.fill_between(x, y - std, y + std, color=colors[method], alpha=0.15, lw=0)
+    ax.grid(alpha=0.3)
+    ax.set_xlabel(param_label(str(summary["param_name"].iloc[0])))
+
+
+def plot_success(summary: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
+    """Success rate vs parameter with Wilson 95 % bands."""
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    _lines(ax, summary, "success_rate", "ci_low", "ci_high")
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_ylabel("success rate (Wilson 95 % CI)")
+    lo, hi = int(summary["n"].min()), int(summary["n"].max())
+    n = str(lo) if lo == hi else f"{lo}–{hi}"
+    ax.set_title(f"{summary['env_id'].iloc[0]}: success rate (n = {n} episodes per point)")
+    ax.legend(fontsize=8, loc="best")
+    return _save(fig, out_dir, stem)
+
+
+def plot_energy(summary: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
+    """Energy per episode vs parameter, mean ± std."""
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    _lines(ax, summary, "energy_mean_j", None, None, band_std="energy_std_j")
+    ax.set_ylabel(r"energy per episode $\int|\tau\cdot\dot q|\,dt$ [J]")
+    ax.set_title(f"{summary['env_id'].iloc[0]}: energy (mean ± std)")
+    ax.legend(fontsize=8, loc="best")
+    return _save(fig, out_dir, stem)
+
+
+def plot_safety(summary: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
+    """Peak contact force and peak joint torque vs parameter (episode means)."""
+    fig, (ax_f, ax_t) = plt.subplots(1, 2, figsize=(11, 4.2))
+    _lines(ax_f, summary, "peak_contact_force_mean_n", None, None)
+    ax_f.set_ylabel("peak contact force [N]")
+    ax_f.set_title("peak contact force (episode mean)")
+    _lines(ax_t, summary, "peak_torque_mean_nm", None, None)
+    ax_t.set_ylabel("peak joint torque [Nm]")
+    ax_t.set_title("peak joint torque (episode mean)")
+    ax_t.legend(fontsize=8, loc="best")
+    fig.suptitle(f"{summary['env_id'].iloc[0]}: safety")
+    fig.tight_layout()
+    return _save(fig, out_dir, stem)
+
+
+def plot_all(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
+    """Draw every figure into ``out_dir`` (created if needed); returns the files written."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    param = str(summary["param_name"].iloc[0])
+    return [
+        *plot_surface(summary, out_dir),
+        *plot_success(summary, out_dir, f"success_vs_{param}"),
+        *plot_energy(summary, out_dir, f"energy_vs_{param}"),
+        *plot_safety(summary, out_dir, f"safety_vs_{param}"),
+    ]

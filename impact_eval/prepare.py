@@ -1,0 +1,180 @@
+"""Pre-flight checks: everything is validated before the output directory is touched.
+
+``prepare`` turns parsed CLI arguments into a ``Plan`` or raises a one-line ``ImpactError``:
+grid, methods, env id, parameter name, parameter values (one reset each), output directory,
+resume state, and finally one build of every method's policy (checkpoints load).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_eval import csvio, runinfo
+from impact_eval.envs import (
+    EnvInfo,
+    check_env_id,
+    check_param,
+    describe_env,
+    make_env,
+    probe_values,
+)
+from impact_eval.grid import episode_seed, format_value, parse_grid
+from impact_eval.methods import MethodSpec, resolve_method
+from impact_eval.report import EPISODES_CSV
+from impact_eval.sweep import SweepConfig
+
+
+@dataclass(frozen=True)
+class SweepRequest:
+    """The sweep as asked for on the command line (already type-converted by argparse)."""
+
+    env_id: str
+    methods: str
+    grid: str
+    param: str | None
+    episodes: int
+    out: Path
+    workers: int
+    envs_per_worker: int
+    seed: int
+    resume: bool
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A validated sweep: config for the workers, env facts, and the cells already done."""
+
+    config: SweepConfig
+    env: EnvInfo
+    out: Path
+    done: set[csvio.EpisodeKey]
+    previous_run: dict | None
+
+
+def parse_methods(text: str) -> list[MethodSpec]:
+    """Comma list of method names -> specs (unknown or repeated names are bad input)."""
+    names = [m.strip() for m in text.split(",")]
+    if any(not n for n in names):
+        raise InvalidArgumentError(f"malformed --method {text!r}: empty item")
+    if len(set(names)) != len(names):
+        raise InvalidArgumentError(f"malformed --method {text!r}: repeated method")
+    return [resolve_method(n) for n in names]
+
+
+def check_numbers(req: SweepRequest) -> None:
+    """Counts must be positive and the seed non-negative."""
+    for name, value, low in (
+        ("--episodes", req.episodes, 1),
+        ("--workers", req.workers, 1),
+        ("--envs-per-worker", req.envs_per_worker, 1),
+        ("--seed", req.seed, 0),
+    ):
+        if value < low:
+            raise InvalidArgumentError(f"{name} must be >= {low}, got {value}")
+
+
+def check_out_dir(out: Path) -> None:
+    """``out`` must be a directory or creatable, on a writable filesystem (probed, no residue)."""
+    if out.exists() and not out.is_dir():
+        raise InvalidArgumentError(f"--out {out} exists and is not a directory")
+    anchor = out
+    while not anchor.exists() and anchor != anchor.parent:
+        anchor = anchor.parent
+    try:
+        if not anchor.is_dir():
+            raise NotADirectoryError(f"{anchor} is not a directory")
+        with tempfile.TemporaryFile(dir=anchor):
+            pass
+    except OSError as exc:
+        raise InvalidArgumentError(f"--out {out} is not writable: {exc}") from None
+
+
+def load_done(req: SweepRequest, env: EnvInfo, values: list[float]) -> set[csvio.EpisodeKey]:
+    """Cells already in ``episodes.csv`` (``--resume``), checked against this grid's seeds."""
+    path = req.out / EPISODES_CSV
+    if not path.exists():
+        return set()
+    if not req.resume:
+        raise InvalidArgumentError(
+            f"{path} already exists; pass --resume to continue it or choose another --out"
+        )
+    index = {format_value(v): i for i, v in enumerate(values)}
+    done = set()
+    for row in csvio.read_rows(path):
+        key = csvio.row_key(row)
+        if row["env_id"] != env.env_id or row["param_name"] != env.param_name:
+            raise InvalidArgumentError(
+                f"cannot resume: {path} holds {row['env_id']}/{row['param_name']} episodes"
+            )
+        vi = index.get(key[1])
+        if vi is not None and int(row["seed"]) != episode_seed(req.seed, vi, key[2]):
+            raise InvalidArgumentError(
+                f"cannot resume: seeds in {path} do not match this grid and --seed "
+                "(was the grid changed?); use the original arguments or another --out"
+            )
+        done.add(key)
+    return done
+
+
+def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]) -> EnvInfo:
+    """Build one env per controller, read its facts and probe the parameter values."""
+    envs = {}
+    try:
+        for spec in specs:
+            if spec.controller not in envs:
+                envs[spec.controller] = make_env(req.env_id, spec.controller)
+        first = next(iter(envs.values()))
+        info = describe_env(first)
+        check_param(info, req.param)
+        probe_values(first, info.param_name, values)
+        return info
+    finally:
+        for env in envs.values():
+            env.close()
+
+
+def _build_policies(req: SweepRequest, specs: list[MethodSpec], env_id: str) -> None:
+    """Build each method's policy once (checkpoints load, experts exist), then drop it."""
+    for spec in specs:
+        env = make_env(req.env_id, spec.controller)
+        try:
+            spec.build(env_id, env)
+        except ImpactError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - any build failure is reported in one line
+            msg = " ".join(str(exc).split())[:160]
+            raise InvalidArgumentError(
+                f"cannot build method {spec.name!r} for {env_id}: {type(exc).__name__}: {msg}"
+            ) from None
+        finally:
+            env.close()
+
+
+def prepare(req: SweepRequest) -> Plan:
+    """Validate a sweep request without creating any file."""
+    check_numbers(req)
+    values = parse_grid(req.grid)
+    check_env_id(req.env_id)  # imports the env's module, which may register methods too
+    specs = parse_methods(req.methods)
+    info = _inspect_env(req, specs, values)
+    check_out_dir(req.out)
+    previous = runinfo.read_run_json(req.out) if req.resume else None
+    runinfo.check_resumable(previous, req.env_id, req.seed, info.param_name)
+    done = load_done(req, info, values)
+    _build_policies(req, specs, info.env_id)
+    config = SweepConfig(
+        env_id=req.env_id,
+        canonical_env_id=info.env_id,
+        param_name=info.param_name,
+        policy_dt=info.policy_dt,
+        methods=tuple(s.name for s in specs),
+        values=tuple(values),
+        episodes=req.episodes,
+        seed=req.seed,
+        workers=req.workers,
+        envs_per_worker=req.envs_per_worker,
+    )
+    return Plan(config=config, env=info, out=req.out, done=done, previous_run=previous)

@@ -1,0 +1,103 @@
+"""``summary.csv`` and plots, computed from ``episodes.csv`` alone (``impact-eval report DIR``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from impact_envs.errors import InvalidArgumentError
+from impact_eval.metrics import EPISODE_COLUMNS, wilson_interval
+
+EPISODES_CSV = "episodes.csv"
+SUMMARY_CSV = "summary.csv"
+PLOTS_DIR = "plots"
+
+SUMMARY_COLUMNS: tuple[str, ...] = (
+    "method",
+    "env_id",
+    "param_name",
+    "param_value",
+    "n",
+    "successes",
+    "success_rate",
+    "ci_low",
+    "ci_high",
+    "success_once_rate",
+    "energy_mean_j",
+    "energy_std_j",
+    "peak_torque_mean_nm",
+    "peak_contact_force_mean_n",
+    "pose_error_mean_m",
+    "time_to_success_mean_s",
+    "n_unstable",
+    "n_exception",
+)
+"""Columns of ``summary.csv``: one row per (method, parameter value)."""
+
+
+def load_episodes(out_dir: Path) -> pd.DataFrame:
+    """Read ``out_dir/episodes.csv``; raises ``InvalidArgumentError`` if missing or empty."""
+    path = Path(out_dir) / EPISODES_CSV
+    if not path.is_file():
+        raise InvalidArgumentError(f"{path} not found; run impact-eval with --out {out_dir} first")
+    try:
+        df = pd.read_csv(path, keep_default_na=False, na_values=["nan", "NaN"])
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise InvalidArgumentError(f"cannot read {path}: {exc}") from None
+    missing = [c for c in EPISODE_COLUMNS if c not in df.columns]
+    if missing:
+        raise InvalidArgumentError(f"{path} lacks columns {', '.join(missing)}")
+    if df.empty:
+        raise InvalidArgumentError(f"{path} has no episodes")
+    df["failure_reason"] = df["failure_reason"].fillna("").astype(str)
+    return df
+
+
+def _summarize_group(g: pd.DataFrame) -> dict[str, object]:
+    """Summary statistics of the episodes of one (method, value) cell."""
+    n, k = len(g), int(g["success"].sum())
+    low, high = wilson_interval(k, n)
+    reasons = g["failure_reason"]
+    return {
+        "n": n,
+        "successes": k,
+        "success_rate": k / n,
+        "ci_low": low,
+        "ci_high": high,
+        "success_once_rate": float(g["success_once"].mean()),
+        "energy_mean_j": g["energy_j"].mean(),
+        "energy_std_j": g["energy_j"].std(),
+        "peak_torque_mean_nm": g["peak_torque_nm"].mean(),
+        "peak_contact_force_mean_n": g["peak_contact_force_n"].mean(),
+        "pose_error_mean_m": g["mean_pose_error_m"].mean(),
+        "time_to_success_mean_s": g["time_to_success_s"].mean(),
+        "n_unstable": int(reasons.str.startswith("unstable").sum()),
+        "n_exception": int(reasons.str.startswith("exception").sum()),
+    }
+
+
+def summarize(episodes: pd.DataFrame) -> pd.DataFrame:
+    """One row per (method, parameter value), sorted; see ``SUMMARY_COLUMNS``."""
+    rows = []
+    keys = ["method", "env_id", "param_name", "param_value"]
+    for key, group in episodes.groupby(keys, sort=True):
+        rows.append({**dict(zip(keys, key, strict=True)), **_summarize_group(group)})
+    return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
+
+
+def write_report(out_dir: Path) -> tuple[Path, list[Path]]:
+    """Write ``summary.csv`` and every plot from ``episodes.csv``.
+
+    Returns:
+        ``(summary_path, plot_paths)``.
+    """
+    from impact_eval.plots import plot_all
+
+    out_dir = Path(out_dir)
+    summary = summarize(load_episodes(out_dir))
+    summary_path = out_dir / SUMMARY_CSV
+    tmp = summary_path.with_name(SUMMARY_CSV + ".tmp")
+    summary.to_csv(tmp, index=False)
+    tmp.replace(summary_path)
+    return summary_path, plot_all(summary, out_dir / PLOTS_DIR)

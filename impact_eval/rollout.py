@@ -1,0 +1,151 @@
+"""Lockstep rollout of a small batch of episodes with one batched ``policy.act`` per step.
+
+Runs inside sweep workers, so it imports only NumPy, Gymnasium-free helpers and the error types.
+"""
+
+from __future__ import annotations
+
+import random
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from impact_envs.errors import SimulationError
+from impact_envs.policies.protocol import Policy, stack_obs
+from impact_eval.metrics import EpisodeTracker
+
+
+@dataclass(frozen=True)
+class EpisodeJob:
+    """One episode to run: parameter value, paired seed and episode index."""
+
+    value: float
+    seed: int
+    episode: int
+
+
+FinishCallback = Callable[[int, dict[str, object]], None]
+"""Called as ``on_finish(batch_index, metric_columns)`` the moment an episode ends."""
+
+
+def seed_global_rngs(seed: int) -> None:
+    """Seed Python, NumPy-global and (if loaded) torch RNGs for policies that use them."""
+    random.seed(seed)
+    np.random.seed(seed % 2**32)
+    torch = sys.modules.get("torch")
+    if torch is not None:
+        torch.manual_seed(seed)
+
+
+def obs_is_finite(obs: object) -> bool:
+    """True when every floating-point array of a (Dict) observation is finite."""
+    values = obs.values() if isinstance(obs, dict) else [obs]
+    for value in values:
+        arr = np.asarray(value)
+        if np.issubdtype(arr.dtype, np.floating) and not np.all(np.isfinite(arr)):
+            return False
+    return True
+
+
+def _placeholder_obs(env: object) -> dict[str, np.ndarray]:
+    """All-zero observation of ``env``'s Dict space (stands in for an env whose reset failed)."""
+    spaces = env.observation_space.spaces  # type: ignore[attr-defined]
+    return {k: np.zeros(s.shape, dtype=s.dtype) for k, s in spaces.items()}
+
+
+def _crash_reason(exc: BaseException) -> str:
+    """Failure reason of an exception raised inside an episode."""
+    if isinstance(exc, SimulationError):
+        return f"unstable: {exc}"
+    return f"exception: {type(exc).__name__}"
+
+
+class LockstepBatch:
+    """Runs ``len(jobs)`` episodes on ``envs`` in lockstep; finished envs stop being stepped.
+
+    Finished envs keep their last observation in the batch so that a stateful policy's rows stay
+    aligned; their actions are discarded.
+    """
+
+    def __init__(self, envs: Sequence[object], policy: Policy, param_name: str, policy_dt: float):
+        self.envs = envs
+        self.policy = policy
+        self.param_name = param_name
+        self.policy_dt = policy_dt
+
+    def run(
+        self,
+        jobs: Sequence[EpisodeJob],
+        on_finish: FinishCallback,
+        heartbeat: Callable[[], None] | None = None,
+    ) -> None:
+        """Run ``jobs`` (one per env, ``len(jobs) <= len(envs)``) to the end.
+
+        ``heartbeat`` is called once per step (workers use it to exit when the parent died).
+        """
+        n = len(jobs)
+        seed_global_rngs(jobs[0].seed)
+        self.policy.reset(n)
+        seeder = getattr(self.policy, "seed", None)
+        if callable(seeder):
+            seeder([job.seed for job in jobs])
+        trackers = [EpisodeTracker(self.policy_dt) for _ in range(n)]
+        obs = [self._reset(i, job, trackers[i], on_finish) for i, job in enumerate(jobs)]
+        while not all(t.done for t in trackers):
+            if heartbeat is not None:
+                heartbeat()
+            try:
+                actions = np.asarray(self.policy.act(stack_obs(obs)), dtype=np.float32)
+                if actions.shape[0] != n:
+                    raise ValueError(f"policy returned {actions.shape[0]} actions for {n} envs")
+            except Exception as exc:  # noqa: BLE001 - recorded as the episodes' failure reason
+                for i, tracker in enumerate(trackers):
+                    if not tracker.done:
+                        self._finish(i, tracker, _crash_reason(exc), on_finish)
+                return
+            for i, tracker in enumerate(trackers):
+                if not tracker.done:
+                    obs[i] = self._step(i, actions[i], obs[i], tracker, on_finish)
+
+    def _reset(
+        self, i: int, job: EpisodeJob, tracker: EpisodeTracker, on_finish: FinishCallback
+    ) -> dict[str, np.ndarray]:
+        """Reset env ``i`` for ``job``; a failing reset ends the episode at length 0."""
+        try:
+            obs, _ = self.envs[i].reset(seed=job.seed, options={self.param_name: job.value})
+            if not obs_is_finite(obs):
+                raise SimulationError("non-finite observation after reset")
+            return obs
+        except Exception as exc:  # noqa: BLE001 - recorded as the episode's failure reason
+            self._finish(i, tracker, _crash_reason(exc), on_finish)
+            return _placeholder_obs(self.envs[i])
+
+    def _step(
+        self,
+        i: int,
+        action: np.ndarray,
+        last_obs: dict[str, np.ndarray],
+        tracker: EpisodeTracker,
+        on_finish: FinishCallback,
+    ) -> dict[str, np.ndarray]:
+        """Step env ``i``; returns the observation to feed the policy next."""
+        try:
+            obs, _, terminated, truncated, info = self.envs[i].step(action)
+            tracker.update(info)
+            if not obs_is_finite(obs):
+                raise SimulationError("non-finite observation")
+        except Exception as exc:  # noqa: BLE001 - recorded as the episode's failure reason
+            self._finish(i, tracker, _crash_reason(exc), on_finish)
+            return last_obs
+        if terminated or truncated:
+            reason = str(info.get("failure_reason") or ("timeout" if truncated else "terminated"))
+            self._finish(i, tracker, reason, on_finish)
+        return obs
+
+    @staticmethod
+    def _finish(i: int, tracker: EpisodeTracker, reason: str, on_finish: FinishCallback) -> None:
+        """Close episode ``i`` and report its metric columns."""
+        tracker.finish(reason)
+        on_finish(i, tracker.row())

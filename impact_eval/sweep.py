@@ -1,0 +1,251 @@
+"""Sweep engine: plan the (method, value, episode) grid and run it on process-parallel workers.
+
+Each worker owns a few envs per controller and one policy per method, and runs tasks of up to
+``envs_per_worker`` episodes of one (method, value) in lockstep (one batched ``policy.act`` per
+step). Workers stream each finished episode's row to the parent, the only writer of the CSV.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import queue
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+
+from tqdm import tqdm
+
+from impact_envs.errors import ImpactError
+from impact_envs.policies.protocol import Policy
+from impact_eval.grid import episode_seed, format_value
+from impact_eval.rollout import EpisodeJob, LockstepBatch
+
+RowSink = Callable[[dict[str, object]], None]
+
+
+class SweepError(ImpactError):
+    """The sweep could not finish (a worker died or failed outside an episode)."""
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """Everything a worker needs (picklable)."""
+
+    env_id: str
+    """Id as given on the CLI (may carry a ``module:`` prefix that registers it)."""
+    canonical_env_id: str
+    """``env.spec.id``, written to the CSV."""
+    param_name: str
+    policy_dt: float
+    methods: tuple[str, ...]
+    values: tuple[float, ...]
+    episodes: int
+    seed: int
+    workers: int
+    envs_per_worker: int
+
+
+@dataclass(frozen=True)
+class Task:
+    """Up to ``envs_per_worker`` episodes of one (method, value), run in lockstep."""
+
+    method: str
+    value: float
+    jobs: tuple[EpisodeJob, ...]
+
+
+def plan_tasks(cfg: SweepConfig, done: set[tuple[str, str, int]]) -> list[Task]:
+    """Tasks for every cell not in ``done`` (keys as ``csvio.row_key``).
+
+    Ordered value-major, then episode block, then method, so that an interrupted sweep leaves
+    paired results (all methods at the same values and seeds).
+    """
+    tasks = []
+    size = cfg.envs_per_worker
+    for vi, value in enumerate(cfg.values):
+        for start in range(0, cfg.episodes, size):
+            block = range(start, min(start + size, cfg.episodes))
+            for method in cfg.methods:
+                jobs = tuple(
+                    EpisodeJob(value, episode_seed(cfg.seed, vi, e), e)
+                    for e in block
+                    if (method, format_value(value), e) not in done
+                )
+                if jobs:
+                    tasks.append(Task(method, value, jobs))
+    return tasks
+
+
+class Worker:
+    """Per-process state: envs per controller and one policy per method, built on first use."""
+
+    def __init__(self, cfg: SweepConfig) -> None:
+        from impact_eval.envs import import_env_module
+
+        import_env_module(cfg.env_id)
+        self.cfg = cfg
+        self.envs: dict[str, list[object]] = {}
+        self.policies: dict[str, Policy] = {}
+
+    def _envs(self, controller: str, n: int) -> list[object]:
+        from impact_eval.envs import make_env
+
+        envs = self.envs.setdefault(controller, [])
+        while len(envs) < n:
+            envs.append(make_env(self.cfg.env_id, controller))
+        return envs
+
+    def _policy(self, method: str) -> Policy:
+        from impact_eval.methods import resolve_method
+
+        if method not in self.policies:
+            spec = resolve_method(method)
+            env = self._envs(spec.controller, 1)[0]
+            self.policies[method] = spec.build(self.cfg.canonical_env_id, env)
+        return self.policies[method]
+
+    def run(self, task: Task, sink: RowSink, heartbeat: Callable[[], None] | None = None) -> None:
+        """Run one task; ``sink`` receives each full CSV row as its episode ends."""
+        from impact_eval.methods import resolve_method
+
+        envs = self._envs(resolve_method(task.method).controller, len(task.jobs))
+        batch = LockstepBatch(
+            envs, self._policy(task.method), self.cfg.param_name, self.cfg.policy_dt
+        )
+
+        def on_finish(i: int, metrics: dict[str, object]) -> None:
+            job = task.jobs[i]
+            sink(
+                {
+                    "method": task.method,
+                    "env_id": self.cfg.canonical_env_id,
+                    "param_name": self.cfg.param_name,
+                    "param_value": job.value,
+                    "seed": job.seed,
+                    "episode": job.episode,
+                    **metrics,
+                }
+            )
+
+        batch.run(task.jobs, on_finish, heartbeat)
+
+    def close(self) -> None:
+        """Close every env."""
+        for envs in self.envs.values():
+            for env in envs:
+                env.close()  # type: ignore[attr-defined]
+
+
+def _exit_if_orphaned() -> None:
+    """Leave at once when the parent is gone (e.g. SIGKILLed): nobody would read our rows."""
+    parent = mp.parent_process()
+    if parent is not None and not parent.is_alive():
+        os._exit(0)
+
+
+def _worker_main(cfg: SweepConfig, tasks: mp.Queue, results: mp.Queue) -> None:
+    """Worker process: pull tasks until a ``None`` sentinel, stream rows back."""
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    try:
+        worker = Worker(cfg)
+        while True:
+            try:
+                task = tasks.get(timeout=0.5)
+            except queue.Empty:
+                _exit_if_orphaned()
+                continue
+            if task is None:
+                break
+
+            def sink(row: dict[str, object]) -> None:
+                _exit_if_orphaned()
+                results.put(("row", row))
+
+            worker.run(task, sink, _exit_if_orphaned)
+            results.put(("done", None))
+        worker.close()
+    except Exception as exc:  # noqa: BLE001 - reported to the parent, which aborts the sweep
+        results.put(("error", f"{type(exc).__name__}: {' '.join(str(exc).split())[:300]}"))
+
+
+def _context() -> mp.context.BaseContext:
+    """``forkserver`` where available (Linux), else ``spawn``; never plain ``fork``."""
+    methods = mp.get_all_start_methods()
+    return mp.get_context("forkserver" if "forkserver" in methods else "spawn")
+
+
+def _run_inline(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink) -> None:
+    """Run all tasks in this process (``--workers 1``)."""
+    worker = Worker(cfg)
+    try:
+        for task in tasks:
+            worker.run(task, sink)
+    finally:
+        worker.close()
+
+
+def _run_parallel(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink, n: int) -> None:
+    """Run tasks on ``n`` worker processes; the parent only collects rows."""
+    ctx = _context()
+    task_q, result_q = ctx.Queue(), ctx.Queue()
+    for task in [*tasks, *[None] * n]:
+        task_q.put(task)
+    procs = [
+        ctx.Process(target=_worker_main, args=(cfg, task_q, result_q), daemon=True)
+        for _ in range(n)
+    ]
+    for p in procs:
+        p.start()
+    try:
+        _collect(procs, result_q, len(tasks), sink)
+        for p in procs:
+            p.join(timeout=10)
+    finally:
+        for p in procs:
+            if p.is_alive():
+                p.terminate()
+
+
+def _collect(procs: Iterable[mp.Process], result_q: mp.Queue, n_tasks: int, sink: RowSink) -> None:
+    """Forward rows to ``sink`` until every task reported done; fail fast on a dead worker."""
+    remaining = n_tasks
+    while remaining:
+        try:
+            kind, payload = result_q.get(timeout=1.0)
+        except queue.Empty:
+            dead = [p.exitcode for p in procs if p.exitcode not in (None, 0)]
+            if dead:
+                raise SweepError(
+                    f"a worker died (exit code {dead[0]}); rerun with --resume"
+                ) from None
+            continue
+        if kind == "row":
+            sink(payload)
+        elif kind == "done":
+            remaining -= 1
+        else:
+            raise SweepError(f"worker failed: {payload}; rerun with --resume after fixing it")
+
+
+def run_sweep(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink) -> int:
+    """Run ``tasks``, calling ``sink(row)`` in this process for every finished episode.
+
+    Returns:
+        Number of episodes run.
+    """
+    total = sum(len(t.jobs) for t in tasks)
+    bar = tqdm(total=total, unit="ep", desc=f"{cfg.canonical_env_id} sweep", mininterval=0.5)
+
+    def counted(row: dict[str, object]) -> None:
+        sink(row)
+        bar.update(1)
+
+    try:
+        n = min(cfg.workers, len(tasks))
+        if n <= 1:
+            _run_inline(cfg, tasks, counted)
+        else:
+            _run_parallel(cfg, tasks, counted, n)
+    finally:
+        bar.close()
+    return total
