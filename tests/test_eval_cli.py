@@ -1,0 +1,173 @@
+"""impact-eval end to end on the fake env: outputs, determinism, report, bad input."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from test_eval_fake import ENV_ID, run_cli
+
+from impact_eval.cli import main
+from impact_eval.methods import CHECKPOINTS_ENV_VAR
+
+PLOTS = [
+    "success_surface",
+    "success_vs_object_mass",
+    "energy_vs_object_mass",
+    "safety_vs_object_mass",
+]
+
+
+def sweep_args(out: Path, *extra: str, masses: str = "0.5:4:1.5") -> list[str]:
+    return [
+        "--env",
+        ENV_ID,
+        "--method",
+        "fake_fast,fake_impact,fake_slow",
+        "--masses",
+        masses,
+        "--episodes",
+        "5",
+        "--out",
+        str(out),
+        "--envs-per-worker",
+        "2",
+        "--seed",
+        "11",
+        *extra,
+    ]
+
+
+def test_sweep_writes_csvs_run_json_and_plots(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    assert main(sweep_args(out, "--workers", "1", masses="0.5,2,66,77,88")) == 0
+    episodes = pd.read_csv(out / "episodes.csv", keep_default_na=False)
+    assert len(episodes) == 3 * 5 * 5
+    assert set(episodes["env_id"]) == {"ImpactTest/Fake-v0"}
+    reasons = set(episodes["failure_reason"])
+    assert {
+        "unstable: qacc diverged at t=0.1 s",
+        "exception: RuntimeError",
+        "timeout",
+        "unstable: non-finite observation",
+        "",
+    } <= reasons
+    assert (episodes.loc[episodes["method"] == "fake_slow", "success"] == 0).all()
+    summary = pd.read_csv(out / "summary.csv")
+    assert len(summary) == 3 * 5 and (summary["n"] == 5).all()
+    assert (summary["ci_low"] <= summary["success_rate"]).all()
+    assert (summary["success_rate"] <= summary["ci_high"]).all()
+    run = json.loads((out / "run.json").read_text())
+    assert run["env"]["policy_dt_s"] == pytest.approx(1 / 30)
+    assert run["env"]["control_dt_s"] == 0.001
+    assert run["env"]["spec"]["id"] == "ImpactTest/Fake-v0"
+    assert {"numpy", "gymnasium", "mujoco", "torch"} <= set(run["versions"])
+    assert "sha" in run["git"] and run["invocations"][-1]["status"] == "complete"
+    for stem in PLOTS:
+        for ext in ("png", "pdf"):
+            assert (out / "plots" / f"{stem}.{ext}").stat().st_size > 1000
+
+
+def test_same_arguments_give_identical_episodes_csv(tmp_path: Path) -> None:
+    a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
+    assert main(sweep_args(a, "--workers", "2")) == 0
+    assert main(sweep_args(b, "--workers", "2")) == 0
+    assert main(sweep_args(c, "--workers", "1")) == 0
+    text = (a / "episodes.csv").read_text()
+    assert text == (b / "episodes.csv").read_text() == (c / "episodes.csv").read_text()
+    assert "wall" not in text.splitlines()[0]
+
+
+def test_resume_completes_a_partial_csv(tmp_path: Path) -> None:
+    full, part = tmp_path / "full", tmp_path / "part"
+    assert main(sweep_args(full, "--workers", "1")) == 0
+    lines = (full / "episodes.csv").read_text().splitlines(keepends=True)
+    part.mkdir()
+    (part / "episodes.csv").write_text("".join(lines[:20]) + lines[20][:15])  # torn row
+    assert main(sweep_args(part, "--workers", "2")) == 2  # no --resume: refused
+    assert main(sweep_args(part, "--workers", "2", "--resume")) == 0
+    assert (part / "episodes.csv").read_text() == (full / "episodes.csv").read_text()
+    assert main(sweep_args(part, "--workers", "2", "--resume", "--seed", "12")) == 2
+
+
+def test_report_redraws_from_csv(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    assert main(sweep_args(out, "--workers", "1")) == 0
+    summary = (out / "summary.csv").read_text()
+    (out / "summary.csv").unlink()
+    for png in (out / "plots").iterdir():
+        png.unlink()
+    proc = run_cli("report", str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert (out / "summary.csv").read_text() == summary
+    assert sorted(p.name for p in (out / "plots").iterdir()) == sorted(
+        f"{s}.{e}" for s in PLOTS for e in ("png", "pdf")
+    )
+
+
+def _corrupt_checkpoint(root: Path) -> Path:
+    (root / "fake" / "vanilla").mkdir(parents=True)
+    (root / "fake" / "vanilla" / "model.safetensors").write_bytes(b"not a checkpoint")
+    return root
+
+
+BAD_INPUTS = {
+    "unknown env": (["--env", "IMPACT/Nope-v0"], "valid choices"),
+    "unknown method": (["--method", "fake_fast,dp"], "valid choices: scripted"),
+    "unknown parameter": (["--param", "friction"], "valid choices: object_mass"),
+    "malformed grid": (["--masses", "1:0.5"], "malformed grid"),
+    "rejected value": (["--masses", "0,2"], "object_mass=0.0 rejected"),
+    "zero episodes": (["--episodes", "0"], "--episodes must be >= 1"),
+    "missing checkpoint": (["--method", "vanilla_dp"], "no vanilla checkpoint"),
+    "corrupt checkpoint": (["--method", "impact"], "cannot load vanilla checkpoint"),
+    "corrupt sb3 zip": (["--method", "sb3:{tmp}/ppo.zip"], "cannot load SB3 checkpoint"),
+    "missing sb3 zip": (["--method", "sb3:{tmp}/nope.zip"], "does not exist"),
+    "out under a file": (["--out", "{tmp}/afile/sub"], "not writable"),
+    "out on /proc": (["--out", "/proc/impact-eval-test"], "not writable"),
+    "unknown option": (["--mases", "1"], "unrecognized arguments"),
+    "no scripted expert": (["--method", "scripted"], "cannot build method 'scripted'"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_INPUTS))
+def test_bad_input_exits_2_without_files(
+    case: str, tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    (tmp_path / "afile").write_text("x")
+    with zipfile.ZipFile(tmp_path / "ppo.zip", "w") as z:
+        z.writestr("data", "garbage")
+    root = tmp_path / "ckpt"
+    monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(_corrupt_checkpoint(root)))
+    if case == "missing checkpoint":
+        monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(tmp_path / "empty"))
+    extra, message = BAD_INPUTS[case]
+    out = tmp_path / "out"
+    args = sweep_args(out, "--workers", "1")
+    overrides = [a.replace("{tmp}", str(tmp_path)) for a in extra]
+    for flag, value in zip(overrides[::2], overrides[1::2], strict=False):
+        if flag in args:
+            args[args.index(flag) + 1] = value
+        else:
+            args += [flag, value]
+    before = sorted(p.name for p in tmp_path.iterdir())
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("impact-eval: error:"), err
+    assert message in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+    assert not Path("/proc/impact-eval-test").exists()
+
+
+def test_bad_input_in_a_real_process(tmp_path: Path) -> None:
+    proc = run_cli(*sweep_args(tmp_path / "out", "--method", "nope"))
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "valid choices" in proc.stderr
+    assert proc.stdout == "" and not (tmp_path / "out").exists()
+
+
+def test_report_of_missing_dir_is_bad_input(tmp_path: Path) -> None:
+    assert main(["report", str(tmp_path / "nothing")]) == 2
+    assert not (tmp_path / "nothing").exists()
