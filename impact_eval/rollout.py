@@ -88,9 +88,9 @@ class LockstepBatch:
         n = len(jobs)
         seed_global_rngs(jobs[0].seed)
         self.policy.reset(n)
-        seeder = getattr(self.policy, "seed", None)
-        if callable(seeder):
-            seeder([job.seed for job in jobs])
+        seed_envs = getattr(self.policy, "seed_envs", None)
+        if callable(seed_envs):  # optional: per-episode noise, independent of batch layout
+            seed_envs([job.seed for job in jobs])
         trackers = [EpisodeTracker(self.policy_dt) for _ in range(n)]
         obs = [self._reset(i, job, trackers[i], on_finish) for i, job in enumerate(jobs)]
         while not all(t.done for t in trackers):
