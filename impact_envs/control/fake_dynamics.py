@@ -22,6 +22,7 @@ class ConstantArmDynamics:
         self.n = n
         jac = rng.normal(size=(6, n))
         jac[:3] *= 0.3  # ~0.3 m lever arms
+        jac[:3, 4:] *= 0.3  # wrist joints ~0.1 m from the TCP (FR3 wrist limit is 12 Nm)
         self.jacobian = jac
         a = rng.normal(size=(n, n))
         self.mass_matrix = a @ a.T / n + 0.3 * np.eye(n)

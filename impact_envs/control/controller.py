@@ -1,0 +1,238 @@
+"""ImpactController: impedance control + wrench estimation + internal-model feedforward (1 kHz).
+
+Per tick (paper, Algorithm 1):
+    tau = g + C dq + J^T (w_imp + w_ff + w_cmd) + N tau_posture, then rate limit and saturation
+with w_ff = w_pred in mode "impact" and 0 in mode "impedance" (everything else identical).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+from typing import Literal
+
+import numpy as np
+
+from impact_envs.control.config import ControllerConfig
+from impact_envs.control.estimators import make_estimator
+from impact_envs.control.impedance import CartesianImpedance
+from impact_envs.control.internal_model import InternalModel
+from impact_envs.control.jacobian import RegularizedWrenchMap
+from impact_envs.control.limits import TorqueLimiter
+from impact_envs.control.protocols import ArmDynamics
+from impact_envs.control.slow_filter import SlowWrenchFilter
+from impact_envs.errors import InvalidArgumentError, SimulationError, check_choice
+
+__all__ = ["MODES", "ArmDynamics", "ControllerSignals", "ImpactController", "Mode"]
+
+Mode = Literal["impact", "impedance"]
+MODES: tuple[str, ...] = ("impact", "impedance")
+
+
+def _zeros(n: int) -> np.ndarray:
+    return np.zeros(n)
+
+
+@dataclass
+class ControllerSignals:
+    """Signals of the last tick, overwritten in place every tick (``copy()`` to keep them).
+
+    Wrenches are (force [N], torque [Nm]) in the world frame, robot-on-environment sign.
+
+    Attributes:
+        pose_error: [p_d - p [m]; Log(R_d R^T) [rad]] (6,).
+        pos_error_norm_m: |p_d - p| [m].
+        rot_error_norm_rad: |Log(R_d R^T)| [rad].
+        wrench_imp_world: Impedance wrench K e - D J dq (6,).
+        wrench_ext_world: Raw estimate w_hat from the estimator (6,).
+        wrench_slow_world: Slow wrench w_slow (6,).
+        wrench_pred_world: Internal model prediction w_pred (6,) (computed in both modes).
+        wrench_ff_world: Applied feedforward (w_pred in "impact", 0 in "impedance") (6,).
+        wrench_cmd_world: Explicit commanded wrench applied this tick (6,).
+        slow_wrench_rate: Dimensionless slow-wrench rate (see SlowWrenchFilter).
+        surprise_n: Force surprise |w_pred - w_slow| on unmasked axes [N].
+        gate_open: Latched state of the surprise gate.
+        learning_active: Gate open and slow wrench quasi-steady on this tick.
+        tau_cmd: Torque sent after rate limiting and saturation (7,) [Nm].
+    """
+
+    pose_error: np.ndarray = field(default_factory=lambda: _zeros(6))
+    pos_error_norm_m: float = 0.0
+    rot_error_norm_rad: float = 0.0
+    wrench_imp_world: np.ndarray = field(default_factory=lambda: _zeros(6))
+    wrench_ext_world: np.ndarray = field(default_factory=lambda: _zeros(6))
+    wrench_slow_world: np.ndarray = field(default_factory=lambda: _zeros(6))
+    wrench_pred_world: np.ndarray = field(default_factory=lambda: _zeros(6))
+    wrench_ff_world: np.ndarray = field(default_factory=lambda: _zeros(6))
+    wrench_cmd_world: np.ndarray = field(default_factory=lambda: _zeros(6))
+    slow_wrench_rate: float = 0.0
+    surprise_n: float = 0.0
+    gate_open: bool = False
+    learning_active: bool = False
+    tau_cmd: np.ndarray = field(default_factory=lambda: _zeros(7))
+
+    def clear(self) -> None:
+        """Zero every value in place (references to the arrays stay valid)."""
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, np.ndarray):
+                v.fill(0.0)
+            else:
+                setattr(self, f.name, type(v)())
+
+    def copy(self) -> ControllerSignals:
+        """Deep copy (arrays copied) for logging."""
+        values = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            values[f.name] = v.copy() if isinstance(v, np.ndarray) else v
+        return ControllerSignals(**values)
+
+
+class ImpactController:
+    """Torque controller of the IMPACT paper for a 7-DoF arm.
+
+    Attributes:
+        dynamics: Controller model, ``update``-d inside ``compute``.
+        config: Controller configuration.
+        mode: ``"impact"`` (feedforward applied) or ``"impedance"`` (baseline, not applied).
+        internal_model: The learned wrench predictor (``save``/``load`` via safetensors).
+        signals: ``ControllerSignals`` of the last tick.
+    """
+
+    def __init__(
+        self,
+        dynamics: ArmDynamics,
+        config: ControllerConfig | None = None,
+        mode: Mode = "impact",
+    ) -> None:
+        """Create all stages with preallocated buffers; call ``reset`` before ``compute``."""
+        check_choice("controller mode", mode, MODES)
+        self.dynamics = dynamics
+        self.config = config or ControllerConfig()
+        self.mode = mode
+        cfg = self.config
+        self.impedance = CartesianImpedance(cfg.impedance)
+        self.estimator = make_estimator(cfg.estimator, cfg.dt_s)
+        self.slow_filter = SlowWrenchFilter(cfg.slow_wrench, cfg.dt_s)
+        self.internal_model = InternalModel(cfg.internal_model)
+        self.limiter = TorqueLimiter(cfg.limits, cfg.dt_s)
+        self.signals = ControllerSignals()
+        self._shared_map = cfg.impedance.nullspace_pinv_damping == cfg.estimator.regularization
+        self._map_est = RegularizedWrenchMap(cfg.estimator.regularization)
+        self._map_null = (
+            self._map_est
+            if self._shared_map
+            else RegularizedWrenchMap(cfg.impedance.nullspace_pinv_damping)
+        )
+        self._w_extra = np.zeros(6)
+        self._is_reset = False
+
+    def reset(self, q0: np.ndarray, keep_internal_model: bool = False) -> None:
+        """Start an episode at joint configuration ``q0`` [rad].
+
+        Records q0 as the null-space posture, clears estimator, slow filter, gate, history and
+        the torque-rate state (previous command without gravity := 0). With
+        ``keep_internal_model=False`` the network is re-initialised (seeded) and its replay
+        buffer cleared; with True the learned weights and replay persist across episodes.
+        """
+        q0 = np.asarray(q0, dtype=float)
+        if q0.shape != (7,) or not np.all(np.isfinite(q0)):
+            raise InvalidArgumentError(f"invalid q0 {q0!r}; valid: finite array of shape (7,)")
+        self.impedance.set_posture(q0)
+        self.estimator.reset()
+        self.slow_filter.reset()
+        self.limiter.reset()
+        if keep_internal_model:
+            self.internal_model.reset_history()
+        else:
+            self.internal_model.reinitialize()
+        self.signals.clear()
+        self._is_reset = True
+
+    def compute(
+        self,
+        q: np.ndarray,
+        dq: np.ndarray,
+        tau_measured: np.ndarray,
+        pos_target_world: np.ndarray,
+        quat_target_world: np.ndarray,
+        wrench_cmd_world: np.ndarray | None = None,
+        learn_mask: np.ndarray | None = None,
+        gripper_width_m: float = 0.0,
+    ) -> np.ndarray:
+        """One 1 kHz control tick.
+
+        Args:
+            q: Joint positions (7,) [rad].
+            dq: Joint velocities (7,) [rad/s].
+            tau_measured: Joint torque sensor reading (7,) [Nm].
+            pos_target_world: Desired TCP position (3,) [m].
+            quat_target_world: Desired TCP orientation (w, x, y, z).
+            wrench_cmd_world: Optional explicit wrench the robot should apply to the
+                environment (6,) [N, Nm], added as J^T w_cmd (hybrid force control).
+            learn_mask: Optional 6 bools; False freezes internal-model learning on that axis.
+            gripper_width_m: Finger opening [m] (0 ... 0.08), an internal-model feature.
+
+        Returns:
+            Torque command (7,) [Nm] after torque-rate limiting and saturation (a new array).
+
+        Raises:
+            SimulationError: If the command is not finite.
+        """
+        if not self._is_reset:
+            raise InvalidArgumentError("invalid call order; valid: reset(q0) before compute()")
+        q = np.asarray(q, dtype=float)
+        dq = np.asarray(dq, dtype=float)
+        dyn = self.dynamics
+        dyn.update(q, dq)
+        map_est = self._map_est.update(dyn.jacobian)
+        map_null = map_est if self._shared_map else self._map_null.update(dyn.jacobian)
+        w_ext = self.estimator.update(q, dq, tau_measured, dyn, wrench_map=map_est)
+        w_slow = self.slow_filter.update(w_ext)
+        model = self.internal_model
+        model.push(q, dq, gripper_width_m, dyn.pos_ee_world, w_ext)
+        w_pred = model.step(w_slow, self.slow_filter.slow_rate, learn_mask)
+        sig = self.signals
+        w_extra = self._w_extra
+        if self.mode == "impact":
+            w_extra[:] = w_pred
+        else:
+            w_extra.fill(0.0)
+        if wrench_cmd_world is not None:
+            w_extra += wrench_cmd_world
+        imp = self.impedance
+        tau_no_grav = imp.compute(
+            dyn, q, dq, pos_target_world, quat_target_world, map_null, w_extra
+        )
+        tau = self.limiter.apply(tau_no_grav, imp.tau_gravity)
+        if not math.isfinite(float(tau.sum())):
+            raise SimulationError(f"non-finite torque command {tau!r}")
+        if wrench_cmd_world is None:
+            sig.wrench_cmd_world.fill(0.0)
+        else:
+            sig.wrench_cmd_world[:] = wrench_cmd_world
+        self._fill_signals(w_ext, w_slow, w_pred, tau)
+        return tau.copy()
+
+    def _fill_signals(
+        self, w_ext: np.ndarray, w_slow: np.ndarray, w_pred: np.ndarray, tau: np.ndarray
+    ) -> None:
+        """Copy this tick's intermediate values into ``signals``."""
+        sig, imp = self.signals, self.impedance
+        e = imp.pose_error
+        sig.pose_error[:] = e
+        ex, ey, ez, rx, ry, rz = e.tolist()
+        sig.pos_error_norm_m = math.sqrt(ex * ex + ey * ey + ez * ez)
+        sig.rot_error_norm_rad = math.sqrt(rx * rx + ry * ry + rz * rz)
+        sig.wrench_imp_world[:] = imp.wrench_imp_world
+        sig.wrench_ext_world[:] = w_ext
+        sig.wrench_slow_world[:] = w_slow
+        sig.wrench_pred_world[:] = w_pred
+        if self.mode == "impact":
+            sig.wrench_ff_world[:] = w_pred
+        sig.slow_wrench_rate = self.slow_filter.slow_rate
+        sig.surprise_n = self.internal_model.surprise_n
+        sig.gate_open = self.internal_model.gate.is_open
+        sig.learning_active = self.internal_model.learning_active
+        sig.tau_cmd[:] = tau

@@ -1,0 +1,193 @@
+"""ImpactController: modes, feedforward, commanded wrench, limits, signals, persistence."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from impact_envs.control.config import (
+    ControllerConfig,
+    EstimatorConfig,
+    LimitsConfig,
+)
+from impact_envs.control.controller import ImpactController
+from impact_envs.control.fake_dynamics import ConstantArmDynamics
+from impact_envs.control.internal_model import OUTPUT_SCALE
+from impact_envs.control.lie import matrix_to_quat
+from impact_envs.errors import InvalidArgumentError
+
+torch.set_num_threads(1)
+
+W_CONST = np.array([1.0, -2.0, 24.5, 0.1, -0.2, 0.3])
+NO_LIMITS = LimitsConfig(torque_max_nm=(1e9,) * 7, torque_rate_max_nm_per_s=1e12)
+
+
+def _constant_model(ctrl: ImpactController, wrench: np.ndarray) -> None:
+    """Make the internal model output ``wrench`` for any input and freeze it."""
+    last = ctrl.internal_model.net[-1]
+    with torch.no_grad():
+        last.weight.zero_()
+        last.bias.copy_(torch.as_tensor(wrench / OUTPUT_SCALE, dtype=torch.float32))
+    ctrl.internal_model._refresh_mirror()
+    ctrl.internal_model.learning_enabled = False
+
+
+def _make(mode: str, limits: LimitsConfig = NO_LIMITS) -> tuple:
+    dyn = ConstantArmDynamics(seed=21)
+    ctrl = ImpactController(dyn, ControllerConfig(limits=limits), mode=mode)
+    q0 = np.full(7, 0.1)
+    ctrl.reset(q0)
+    dyn.update(q0, np.zeros(7))
+    return dyn, ctrl, q0
+
+
+def _tick(
+    ctrl: ImpactController,
+    dyn: ConstantArmDynamics,
+    q: np.ndarray,
+    target_offset: np.ndarray | None = None,
+    wrench_cmd_world: np.ndarray | None = None,
+    learn_mask: np.ndarray | None = None,
+) -> np.ndarray:
+    """One tick at rest with the target at the current pose (+ offset) [m]."""
+    dyn.update(q, np.zeros(7))
+    pos_d = dyn.pos_ee_world + (np.zeros(3) if target_offset is None else target_offset)
+    quat_d = matrix_to_quat(dyn.rot_ee_world)
+    return ctrl.compute(
+        q, np.zeros(7), dyn.gravity.copy(), pos_d, quat_d, wrench_cmd_world, learn_mask
+    )
+
+
+def test_impedance_mode_applies_no_feedforward_impact_adds_jt_wpred() -> None:
+    dyn_a, imp_ctrl, q0 = _make("impedance")
+    dyn_b, impact_ctrl, _ = _make("impact")
+    _constant_model(imp_ctrl, W_CONST)
+    _constant_model(impact_ctrl, W_CONST)
+    offset = np.array([0.01, 0.0, -0.02])
+    for _ in range(5):
+        tau_imp = _tick(imp_ctrl, dyn_a, q0, offset)
+        tau_impact = _tick(impact_ctrl, dyn_b, q0, offset)
+    # Baseline: pure impedance (w_imp = K e at rest) + gravity.
+    expected = dyn_a.jacobian.T @ (imp_ctrl.signals.wrench_imp_world) + dyn_a.gravity
+    np.testing.assert_allclose(tau_imp, expected, atol=1e-9)
+    np.testing.assert_allclose(imp_ctrl.signals.wrench_ff_world, 0.0)
+    np.testing.assert_allclose(imp_ctrl.signals.wrench_pred_world, W_CONST, atol=1e-5)  # logged
+    np.testing.assert_allclose(tau_impact - tau_imp, dyn_b.jacobian.T @ W_CONST, atol=1e-4)
+    np.testing.assert_allclose(impact_ctrl.signals.wrench_ff_world, W_CONST, atol=1e-5)
+
+
+def test_commanded_wrench_is_added_in_both_modes() -> None:
+    w_cmd = np.array([0.0, 0.0, 10.0, 0.0, 0.0, 0.0])
+    for mode in ("impedance", "impact"):
+        dyn, ctrl, q0 = _make(mode)
+        _constant_model(ctrl, np.zeros(6))
+        base = _tick(ctrl, dyn, q0)
+        with_cmd = _tick(ctrl, dyn, q0, wrench_cmd_world=w_cmd)
+        np.testing.assert_allclose(with_cmd - base, dyn.jacobian.T @ w_cmd, atol=1e-9)
+        np.testing.assert_allclose(ctrl.signals.wrench_cmd_world, w_cmd)
+        again = _tick(ctrl, dyn, q0)  # the command does not persist
+        np.testing.assert_allclose(again, base, atol=1e-9)
+
+
+def test_rate_limit_active_on_step_target() -> None:
+    dyn, ctrl, q0 = _make("impact", limits=LimitsConfig())
+    _constant_model(ctrl, np.zeros(6))
+    taus = [_tick(ctrl, dyn, q0) for _ in range(3)]
+    np.testing.assert_allclose(taus[-1], dyn.gravity, atol=1e-9)  # gravity passes at once
+    taus += [_tick(ctrl, dyn, q0, np.array([0.1, 0.0, 0.0])) for _ in range(40)]
+    deltas = np.abs(np.diff(np.array(taus), axis=0))
+    assert deltas.max() == pytest.approx(1.0)  # 1000 Nm/s at 1 ms
+    assert np.all(deltas <= 1.0 + 1e-12)
+    unlimited = dyn.jacobian.T @ ctrl.signals.wrench_imp_world + dyn.gravity
+    assert np.abs(unlimited - taus[3]).max() > 1.0  # the limiter really clipped
+
+
+def test_output_saturated_to_fr3_limits() -> None:
+    limits = LimitsConfig(torque_rate_max_nm_per_s=1e9)
+    dyn, ctrl, q0 = _make("impedance", limits=limits)
+    tau = _tick(ctrl, dyn, q0, np.array([5.0, 5.0, 5.0]))
+    assert np.all(np.abs(tau) <= np.array(limits.torque_max_nm) + 1e-12)
+    assert np.any(np.isclose(np.abs(tau), limits.torque_max_nm))
+
+
+def test_signals_and_learn_mask() -> None:
+    dyn, ctrl, q0 = _make("impact")
+    offset = np.array([0.0, 0.03, -0.04])
+    tau = _tick(ctrl, dyn, q0, offset, learn_mask=np.zeros(6, dtype=bool))
+    sig = ctrl.signals
+    np.testing.assert_allclose(sig.pose_error[:3], offset, atol=1e-12)
+    assert sig.pos_error_norm_m == pytest.approx(0.05)
+    np.testing.assert_allclose(sig.tau_cmd, tau)
+    snapshot = sig.copy()
+    _tick(ctrl, dyn, q0)
+    assert snapshot.pos_error_norm_m == pytest.approx(0.05)  # copy is detached
+    assert sig.pos_error_norm_m == pytest.approx(0.0, abs=1e-12)
+
+
+def test_internal_model_persistence_across_reset() -> None:
+    dyn, ctrl, q0 = _make("impact")
+    _constant_model(ctrl, W_CONST)
+    _tick(ctrl, dyn, q0)
+    ctrl.reset(q0, keep_internal_model=True)
+    _tick(ctrl, dyn, q0)
+    np.testing.assert_allclose(ctrl.signals.wrench_pred_world, W_CONST, atol=1e-5)
+    ctrl.reset(q0)  # default: fresh model
+    _tick(ctrl, dyn, q0)
+    np.testing.assert_allclose(ctrl.signals.wrench_pred_world, 0.0)
+
+
+def test_invalid_use() -> None:
+    dyn = ConstantArmDynamics()
+    with pytest.raises(InvalidArgumentError):
+        ImpactController(dyn, mode="feedforward")
+    ctrl = ImpactController(dyn)
+    with pytest.raises(InvalidArgumentError):
+        ctrl.compute(np.zeros(7), np.zeros(7), np.zeros(7), np.zeros(3), np.array([1.0, 0, 0, 0]))
+    with pytest.raises(InvalidArgumentError):
+        ctrl.reset(np.zeros(6))
+
+
+def _simulate_payload(mode: str, seconds: float, estimator: str = "residual") -> tuple:
+    """Closed loop on the fake arm: M ddq + C dq + g + b dq = tau + J^T w_ext (semi-implicit
+    Euler), a 2.5 kg payload hanging on the TCP from t = 0.2 s."""
+    dyn = ConstantArmDynamics(seed=21)
+    cfg = ControllerConfig(estimator=EstimatorConfig(kind=estimator))
+    ctrl = ImpactController(dyn, cfg, mode=mode)
+    q, dq = np.full(7, 0.1), np.zeros(7)
+    ctrl.reset(q)
+    dyn.update(q, dq)
+    pos_d, quat_d = dyn.pos_ee_world.copy(), matrix_to_quat(dyn.rot_ee_world)
+    m_inv = np.linalg.inv(dyn.mass_matrix)
+    tau, errors, gate = np.zeros(7), [], []
+    for k in range(int(seconds * 1000)):
+        w_on_robot = np.array([0, 0, -2.5 * 9.81, 0, 0, 0]) if k >= 200 else np.zeros(6)
+        tau_meas = tau.copy()
+        tau = ctrl.compute(q, dq, tau_meas, pos_d, quat_d, gripper_width_m=0.03)
+        ddq = m_inv @ (
+            tau
+            + dyn.jacobian.T @ w_on_robot
+            - dyn.coriolis_matrix @ dq
+            - dyn.gravity
+            - dyn.joint_friction(dq)
+        )
+        dq = dq + 0.001 * ddq
+        q = q + 0.001 * dq
+        errors.append(ctrl.signals.pose_error[:3].copy())
+        gate.append(ctrl.signals.gate_open)
+    return np.array(errors), np.array(gate), ctrl
+
+
+def test_closed_loop_payload_impact_removes_sag_impedance_does_not() -> None:
+    err_imp, gate_imp, ctrl_imp = _simulate_payload("impedance", 3.0)
+    err_impact, gate_impact, ctrl = _simulate_payload("impact", 3.0)
+    # Impedance only: steady sag ~ m g / k = 24.5 / 400 m along -z (e_z = p_d - p > 0).
+    assert err_imp[-1, 2] == pytest.approx(24.5 / 400.0, rel=0.02)
+    np.testing.assert_allclose(ctrl_imp.signals.wrench_slow_world[2], 24.5, atol=0.5)
+    # The gate needs w_slow quasi-steady (|w_hat - w_slow| <= 2 N): ramp 0.73 s + 0.5 ln 5 s.
+    first_open = np.flatnonzero(gate_impact)[0] / 1000.0
+    assert 0.2 + 1.4 < first_open < 0.2 + 1.7
+    # IMPACT: the model learned m g and the sag is (almost) gone; impedance still sags.
+    np.testing.assert_allclose(ctrl.signals.wrench_pred_world[2], 24.5, atol=1.5)
+    assert np.linalg.norm(err_impact[-1]) < 0.003
+    assert np.linalg.norm(err_imp[-1]) > 0.06

@@ -1,0 +1,171 @@
+"""Internal model: fast path vs torch, gate behaviour, online learning, persistence."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from impact_envs.control.config import InternalModelConfig
+from impact_envs.control.internal_model import (
+    FEATURE_DIM,
+    FEATURE_OFFSET,
+    FEATURE_SCALE,
+    InternalModel,
+)
+from impact_envs.control.surprise_gate import SurpriseGate
+from impact_envs.errors import CheckpointError, InvalidArgumentError
+
+torch.set_num_threads(1)
+
+Q = np.array([0.1, -0.4, 0.2, -2.0, 0.1, 1.8, 0.7])
+POS = np.array([0.5, 0.1, 0.25])
+PAYLOAD = np.array([0.0, 0.0, 24.5, 0.0, 0.0, 0.0])  # 2.5 kg, robot-on-environment sign
+
+
+def _push(model: InternalModel, w_ext: np.ndarray, dq: np.ndarray | None = None) -> None:
+    model.push(Q, np.zeros(7) if dq is None else dq, 0.03, POS, w_ext)
+
+
+def _run(model: InternalModel, w_slow: np.ndarray, ticks: int, slow_rate: float = 0.0, mask=None):
+    for _ in range(ticks):
+        _push(model, w_slow)
+        model.step(w_slow, slow_rate, mask)
+    return model.predict().copy()
+
+
+def test_initial_prediction_is_zero_and_history_layout() -> None:
+    model = InternalModel()
+    np.testing.assert_array_equal(model.predict(), 0.0)
+    for k in range(40):
+        model.push(Q + k, np.full(7, k), 0.01 * k, POS, np.full(6, float(k)))
+    x = model.history_input().reshape(32, FEATURE_DIM)
+    z = np.concatenate([Q + 39, np.full(7, 39.0), [0.39], POS, np.full(6, 39.0)])
+    np.testing.assert_allclose(x[-1], (z - FEATURE_OFFSET) / FEATURE_SCALE, rtol=1e-6)
+    np.testing.assert_allclose(x[0, 7], 8.0)  # oldest of the last 32 ticks is k = 8 (dq scale 1)
+
+
+def test_first_push_fills_history() -> None:
+    model = InternalModel()
+    _push(model, PAYLOAD)
+    x = model.history_input().reshape(32, FEATURE_DIM)
+    np.testing.assert_array_equal(x, np.broadcast_to(x[-1], x.shape))
+
+
+def test_numpy_fast_path_matches_torch() -> None:
+    model = InternalModel(InternalModelConfig(seed=3))
+    gen = torch.Generator().manual_seed(0)
+    with torch.no_grad():
+        for p in model.net.parameters():
+            p.copy_(0.1 * torch.randn(p.shape, generator=gen))
+    model._refresh_mirror()
+    rng = np.random.default_rng(1)
+    for _ in range(40):
+        model.push(Q + rng.normal(size=7), rng.normal(size=7), 0.04, POS, rng.normal(size=6) * 10)
+        fast, ref = model.predict().copy(), model.predict_torch()
+        assert np.abs(ref).max() > 0.1  # a non-trivial network
+        np.testing.assert_allclose(fast, ref, rtol=1e-5, atol=1e-5)
+
+
+def test_learns_constant_payload_when_gate_opens() -> None:
+    model = InternalModel()
+    _push(model, PAYLOAD)
+    model.step(PAYLOAD, 0.0)
+    assert model.gate.is_open and model.surprise_n == pytest.approx(24.5)
+    pred = _run(model, PAYLOAD, 1500)
+    np.testing.assert_allclose(pred, PAYLOAD, atol=0.5)
+    assert not model.gate.is_open  # released below 0.5 N
+    assert 0 < model.n_updates < 300  # quick: fewer than 300 SGD steps (1.5 s at 1 update / 5 ms)
+
+
+def test_gate_stays_closed_below_threshold() -> None:
+    model = InternalModel()
+    small = np.array([3.0, 0.0, 3.5, 0.0, 0.0, 0.0])  # |f| = 4.6 N < 5 N
+    pred = _run(model, small, 500)
+    assert model.n_updates == 0 and not model.gate.is_open
+    np.testing.assert_array_equal(pred, 0.0)
+
+
+def test_gate_waits_for_quasi_steady_slow_wrench() -> None:
+    model = InternalModel()
+    _run(model, PAYLOAD, 300, slow_rate=0.5)  # w_slow still moving: no learning
+    assert model.n_updates == 0 and not model.gate.is_open
+    _run(model, PAYLOAD, 10, slow_rate=0.1)
+    assert model.gate.is_open and model.n_updates == 2
+
+
+def test_learn_mask_freezes_axis() -> None:
+    model = InternalModel()
+    target = np.array([8.0, 0.0, 24.5, 0.0, 0.0, 0.0])
+    mask = np.array([True, True, False, True, True, True])
+    pred = _run(model, target, 1500, mask=mask)
+    assert pred[0] == pytest.approx(8.0, abs=0.5)
+    assert abs(pred[2]) < 0.5  # z frozen at its initial prediction 0
+    assert not model.gate.is_open  # surprise ignores the frozen axis
+
+
+def test_schmitt_gate() -> None:
+    gate = SurpriseGate(5.0, 0.5, 0.2)
+    assert gate.update(4.9, 0.0) is False
+    assert gate.update(5.0, 0.3) is False and not gate.is_open  # not quasi-steady
+    assert gate.update(5.0, 0.1) is True
+    assert gate.update(2.0, 0.1) is True  # hysteresis: still learning
+    assert gate.update(2.0, 0.5) is False and gate.is_open  # paused, still latched
+    assert gate.update(0.4, 0.1) is False and not gate.is_open
+    literal = SurpriseGate(5.0, 5.0, 0.2)
+    assert literal.update(6.0, 0.0) is True
+    assert literal.update(4.0, 0.0) is False  # single threshold
+
+
+def test_reset_history_keeps_weights_reinitialize_clears() -> None:
+    model = InternalModel()
+    pred = _run(model, PAYLOAD, 600)
+    model.reset_history()
+    _push(model, PAYLOAD)
+    np.testing.assert_allclose(model.predict(), pred, atol=1e-6)
+    model.reinitialize()
+    _push(model, PAYLOAD)
+    np.testing.assert_array_equal(model.predict(), 0.0)
+    assert model.replay.count == 0 and model.n_updates == 0
+
+
+def test_save_load_round_trip(tmp_path: Path) -> None:
+    model = InternalModel(InternalModelConfig(hidden_sizes=(32, 16)))
+    _run(model, PAYLOAD, 400)
+    path = model.save(tmp_path / "im.safetensors")
+    assert path.with_suffix(".json").is_file()
+    for loaded in (InternalModel.from_file(path), InternalModel(model.config)):
+        loaded.load(path)
+        model.reset_history()
+        rng = np.random.default_rng(2)
+        for _ in range(5):
+            args = (Q + rng.normal(size=7), rng.normal(size=7), 0.02, POS, rng.normal(size=6))
+            model.push(*args)
+            loaded.push(*args)
+            np.testing.assert_array_equal(loaded.predict(), model.predict())
+            assert abs(model.predict()[2]) > 5.0  # the trained weights, not the initial zeros
+
+
+def test_load_rejects_mismatched_or_missing(tmp_path: Path) -> None:
+    path = InternalModel().save(tmp_path / "a.safetensors")
+    with pytest.raises(CheckpointError):
+        InternalModel(InternalModelConfig(hidden_sizes=(32, 32))).load(path)
+    with pytest.raises(CheckpointError):
+        InternalModel().load(tmp_path / "missing.safetensors")
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"history_length": 0},
+        {"hidden_sizes": ()},
+        {"surprise_release_n": 6.0},
+        {"learning_rate": -1.0},
+        {"update_every": 0},
+    ],
+)
+def test_config_validation(kwargs: dict) -> None:
+    with pytest.raises(InvalidArgumentError):
+        InternalModelConfig(**kwargs)
