@@ -71,9 +71,11 @@ def _save(fig: plt.Figure, out_dir: Path, stem: str) -> list[Path]:
 
 
 def _bar_width(values: np.ndarray) -> float:
-    """Bar depth along the parameter axis: 70 % of the smallest grid spacing."""
-    gaps = np.diff(np.unique(values))
-    return 0.7 * float(gaps.min()) if gaps.size else 0.5
+    """Bar width along the parameter axis: 70 % of the smallest gap, at most 8 % of the span."""
+    unique = np.unique(values)
+    if unique.size < 2:
+        return 0.5 * max(1.0, abs(float(unique[0]))) if unique.size else 0.5
+    return min(0.7 * float(np.diff(unique).min()), 0.08 * float(unique[-1] - unique[0]))
 
 
 def plot_surface(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
@@ -99,6 +101,7 @@ def plot_surface(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
         linewidth=0.15,
     )
     ax.set_box_aspect((2.2, 1.1, 0.8))
+    ax.set_xlim(float(x.min()) - dx / 2, float(x.max()) + 1.5 * dx)
     ax.set_xlabel(param_label(str(summary["param_name"].iloc[0])), labelpad=12)
     ax.set_yticks(range(len(methods)))
     ax.set_yticklabels(
@@ -150,6 +153,7 @@ def _lines(
             std = rows[band_std].fillna(0).to_numpy(float)
             ax.fill_between(x, y - std, y + std, color=colors[method], alpha=0.15, lw=0)
     ax.grid(alpha=0.3)
+    ax.ticklabel_format(axis="y", useOffset=False)
     ax.set_xlabel(param_label(str(summary["param_name"].iloc[0])))
 
 
