@@ -29,7 +29,7 @@ def _constant_model(ctrl: ImpactController, wrench: np.ndarray) -> None:
     with torch.no_grad():
         last.weight.zero_()
         last.bias.copy_(torch.as_tensor(wrench / OUTPUT_SCALE, dtype=torch.float32))
-    ctrl.internal_model._refresh_mirror()
+    ctrl.internal_model.refresh_fast_path()
     ctrl.internal_model.learning_enabled = False
 
 
@@ -191,3 +191,27 @@ def test_closed_loop_payload_impact_removes_sag_impedance_does_not() -> None:
     np.testing.assert_allclose(ctrl.signals.wrench_pred_world[2], 24.5, atol=1.5)
     assert np.linalg.norm(err_impact[-1]) < 0.003
     assert np.linalg.norm(err_imp[-1]) > 0.06
+
+
+def test_with_pinocchio_arm_runs_and_holds_still() -> None:
+    dynamics = pytest.importorskip("impact_envs.robot.dynamics")
+    arm = dynamics.PinocchioArm()
+    q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
+    dq = np.zeros(7)
+    arm.update(q, dq)
+    pos_d, quat_d = arm.pos_ee_world.copy(), matrix_to_quat(arm.rot_ee_world)
+    gravity = arm.gravity.copy()
+    for mode in ("impact", "impedance"):
+        ctrl = ImpactController(arm, ControllerConfig(), mode=mode)
+        ctrl.reset(q)
+        for _ in range(20):
+            tau = ctrl.compute(q, dq, gravity, pos_d, quat_d, gripper_width_m=0.04)
+        assert np.all(np.isfinite(tau))
+        np.testing.assert_allclose(tau, gravity, atol=1e-6)  # at the target, at rest
+        np.testing.assert_allclose(ctrl.signals.wrench_ext_world, 0.0, atol=1e-6)
+        # A 1 cm target offset gives K e = 4 N along x on the real kinematics.
+        tau = ctrl.compute(q, dq, gravity, pos_d + [0.01, 0.0, 0.0], quat_d)
+        np.testing.assert_allclose(ctrl.signals.wrench_imp_world[:3], [4.0, 0.0, 0.0], atol=1e-6)
+        wanted = arm.jacobian.T @ ctrl.signals.wrench_imp_world
+        np.testing.assert_allclose(tau - gravity, np.clip(wanted, -1.0, 1.0), atol=1e-9)
+        assert np.abs(wanted).max() > 1.0  # the 1 Nm/tick rate limit was active

@@ -60,7 +60,7 @@ def test_numpy_fast_path_matches_torch() -> None:
     with torch.no_grad():
         for p in model.net.parameters():
             p.copy_(0.1 * torch.randn(p.shape, generator=gen))
-    model._refresh_mirror()
+    model.refresh_fast_path()
     rng = np.random.default_rng(1)
     for _ in range(40):
         model.push(Q + rng.normal(size=7), rng.normal(size=7), 0.04, POS, rng.normal(size=6) * 10)

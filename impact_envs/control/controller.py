@@ -117,7 +117,17 @@ class ImpactController:
         self.slow_filter = SlowWrenchFilter(cfg.slow_wrench, cfg.dt_s)
         self.internal_model = InternalModel(cfg.internal_model)
         self.limiter = TorqueLimiter(cfg.limits, cfg.dt_s)
-        self.signals = ControllerSignals()
+        # Signal arrays alias the stages' output buffers (all written in place every tick).
+        w_pred = self.internal_model.wrench_pred_world
+        self.signals = ControllerSignals(
+            pose_error=self.impedance.pose_error,
+            wrench_imp_world=self.impedance.wrench_imp_world,
+            wrench_ext_world=self.estimator.wrench_world,
+            wrench_slow_world=self.slow_filter.wrench_slow_world,
+            wrench_pred_world=w_pred,
+            wrench_ff_world=w_pred if mode == "impact" else _zeros(6),
+            tau_cmd=self.limiter.output,
+        )
         self._shared_map = cfg.impedance.nullspace_pinv_damping == cfg.estimator.regularization
         self._map_est = RegularizedWrenchMap(cfg.estimator.regularization)
         self._map_null = (
@@ -192,15 +202,14 @@ class ImpactController:
         w_slow = self.slow_filter.update(w_ext)
         model = self.internal_model
         model.push(q, dq, gripper_width_m, dyn.pos_ee_world, w_ext)
-        w_pred = model.step(w_slow, self.slow_filter.slow_rate, learn_mask)
+        model.step(w_slow, self.slow_filter.slow_rate, learn_mask)
         sig = self.signals
         w_extra = self._w_extra
-        if self.mode == "impact":
-            w_extra[:] = w_pred
+        if wrench_cmd_world is None:
+            sig.wrench_cmd_world.fill(0.0)
         else:
-            w_extra.fill(0.0)
-        if wrench_cmd_world is not None:
-            w_extra += wrench_cmd_world
+            sig.wrench_cmd_world[:] = wrench_cmd_world
+        np.add(sig.wrench_ff_world, sig.wrench_cmd_world, out=w_extra)
         imp = self.impedance
         tau_no_grav = imp.compute(
             dyn, q, dq, pos_target_world, quat_target_world, map_null, w_extra
@@ -208,31 +217,16 @@ class ImpactController:
         tau = self.limiter.apply(tau_no_grav, imp.tau_gravity)
         if not math.isfinite(float(tau.sum())):
             raise SimulationError(f"non-finite torque command {tau!r}")
-        if wrench_cmd_world is None:
-            sig.wrench_cmd_world.fill(0.0)
-        else:
-            sig.wrench_cmd_world[:] = wrench_cmd_world
-        self._fill_signals(w_ext, w_slow, w_pred, tau)
+        self._fill_signals()
         return tau.copy()
 
-    def _fill_signals(
-        self, w_ext: np.ndarray, w_slow: np.ndarray, w_pred: np.ndarray, tau: np.ndarray
-    ) -> None:
-        """Copy this tick's intermediate values into ``signals``."""
-        sig, imp = self.signals, self.impedance
-        e = imp.pose_error
-        sig.pose_error[:] = e
-        ex, ey, ez, rx, ry, rz = e.tolist()
+    def _fill_signals(self) -> None:
+        """Update the scalar signals (the arrays are aliases, already current)."""
+        sig, model = self.signals, self.internal_model
+        ex, ey, ez, rx, ry, rz = self.impedance.pose_error.tolist()
         sig.pos_error_norm_m = math.sqrt(ex * ex + ey * ey + ez * ez)
         sig.rot_error_norm_rad = math.sqrt(rx * rx + ry * ry + rz * rz)
-        sig.wrench_imp_world[:] = imp.wrench_imp_world
-        sig.wrench_ext_world[:] = w_ext
-        sig.wrench_slow_world[:] = w_slow
-        sig.wrench_pred_world[:] = w_pred
-        if self.mode == "impact":
-            sig.wrench_ff_world[:] = w_pred
         sig.slow_wrench_rate = self.slow_filter.slow_rate
-        sig.surprise_n = self.internal_model.surprise_n
-        sig.gate_open = self.internal_model.gate.is_open
-        sig.learning_active = self.internal_model.learning_active
-        sig.tau_cmd[:] = tau
+        sig.surprise_n = model.surprise_n
+        sig.gate_open = model.gate.is_open
+        sig.learning_active = model.learning_active

@@ -4,9 +4,9 @@ Per tick the features z = [q (7), dq (7), gripper width (1), p_ee (3), w_ext (6)
 with fixed constants, (z - FEATURE_OFFSET) / FEATURE_SCALE (no data-dependent normalizer since
 the model learns online), and appended to a history of L ticks. The input is the history
 flattened oldest-to-newest, row-major: x[t * 24 + i] = z_norm[t][i]. Output = network
-output * OUTPUT_SCALE (10 N, 1 Nm). The torch module is the trained source of truth; inference
-runs on NumPy views of its weights (tensors are updated in place, the views are refreshed after
-every update and load).
+output * OUTPUT_SCALE (10 N, 1 Nm). The torch module is the trained source of truth; per-tick
+inference runs on a NumPy float32 copy of its weights that is refreshed after every SGD step,
+``load`` and ``reinitialize``.
 """
 
 from __future__ import annotations
@@ -21,48 +21,28 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from impact_envs.control.config import InternalModelConfig
+from impact_envs.control.internal_model_net import (
+    FEATURE_DIM,
+    FEATURE_NAMES,
+    FEATURE_OFFSET,
+    FEATURE_SCALE,
+    FORMAT_VERSION,
+    OUTPUT_SCALE,
+    build_network,
+)
 from impact_envs.control.replay import ReplayBuffer
 from impact_envs.control.surprise_gate import SurpriseGate
 from impact_envs.errors import CheckpointError
 
-FEATURE_NAMES = ("q",) * 7 + ("dq",) * 7 + ("gripper_width",) + ("pos_ee",) * 3 + ("w_ext",) * 6
-FEATURE_DIM = len(FEATURE_NAMES)
-FEATURE_OFFSET = np.array(
-    [0.0, 0.0, 0.0, -1.59695, 0.0, 2.5307, 0.0]  # FR3 joint-range midpoints [rad]
-    + [0.0] * 7  # [rad/s]
-    + [0.04]  # half of the 0.08 m stroke [m]
-    + [0.5, 0.0, 0.3]  # workspace centre [m]
-    + [0.0] * 6,  # [N, Nm]
-    dtype=np.float32,
-)
-FEATURE_SCALE = np.array(
-    [2.7437, 1.7837, 2.9007, 1.44515, 2.8065, 1.9862, 3.0159]  # FR3 half ranges [rad]
-    + [1.0] * 7  # [rad/s]
-    + [0.04]  # [m]
-    + [0.3] * 3  # [m]
-    + [10.0] * 3
-    + [1.0] * 3,  # [N, Nm]
-    dtype=np.float32,
-)
-OUTPUT_SCALE = np.array([10.0, 10.0, 10.0, 1.0, 1.0, 1.0], dtype=np.float32)
-FORMAT_VERSION = 1
-
-
-def build_network(config: InternalModelConfig) -> torch.nn.Sequential:
-    """tanh MLP, input L * 24, output 6; last layer zero-initialised (initial prediction 0)."""
-    gen_state = torch.random.get_rng_state()
-    torch.manual_seed(config.seed)
-    layers: list[torch.nn.Module] = []
-    width = config.history_length * FEATURE_DIM
-    for hidden in config.hidden_sizes:
-        layers += [torch.nn.Linear(width, hidden), torch.nn.Tanh()]
-        width = hidden
-    last = torch.nn.Linear(width, 6)
-    torch.nn.init.zeros_(last.weight)
-    torch.nn.init.zeros_(last.bias)
-    layers.append(last)
-    torch.random.set_rng_state(gen_state)
-    return torch.nn.Sequential(*layers)
+__all__ = [
+    "FEATURE_DIM",
+    "FEATURE_NAMES",
+    "FEATURE_OFFSET",
+    "FEATURE_SCALE",
+    "OUTPUT_SCALE",
+    "InternalModel",
+    "build_network",
+]
 
 
 class InternalModel:
@@ -108,11 +88,11 @@ class InternalModel:
         self._batch_x = np.zeros((cfg.batch_size, self.input_dim), dtype=np.float32)
         self._batch_y = np.zeros((cfg.batch_size, 6), dtype=np.float32)
         self._batch_m = np.zeros((cfg.batch_size, 6), dtype=np.float32)
-        self._refresh_mirror()
+        self.refresh_fast_path()
 
     # ----------------------------------------------------------------- state management
-    def _refresh_mirror(self) -> None:
-        """Copy the torch weights into the NumPy fast path.
+    def refresh_fast_path(self) -> None:
+        """Copy the torch weights into the NumPy fast path (call after editing ``net`` by hand).
 
         Layer 0 keeps (W, b); later layers store [W | b] and act on activations that carry a
         trailing constant 1, which saves one add per layer; OUTPUT_SCALE is folded into the last.
@@ -146,7 +126,7 @@ class InternalModel:
         self.optimizer = torch.optim.SGD(self.net.parameters(), lr=self.config.learning_rate)
         self.replay.clear()
         self.n_updates = 0
-        self._refresh_mirror()
+        self.refresh_fast_path()
         self.reset_history()
 
     # ----------------------------------------------------------------- inference
@@ -265,7 +245,7 @@ class InternalModel:
         loss.backward()
         self.optimizer.step()
         self.n_updates += 1
-        self._refresh_mirror()
+        self.refresh_fast_path()
         return float(loss.detach())
 
     # ----------------------------------------------------------------- persistence
@@ -301,7 +281,7 @@ class InternalModel:
             self.net.load_state_dict(load_file(str(path)))
         except (RuntimeError, OSError) as exc:
             raise CheckpointError(f"cannot load internal model weights {path}: {exc}") from exc
-        self._refresh_mirror()
+        self.refresh_fast_path()
 
     @classmethod
     def from_file(cls, path: str | Path) -> InternalModel:

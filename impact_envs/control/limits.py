@@ -61,7 +61,7 @@ class TorqueLimiter:
         self.tau_max = np.asarray(config.torque_max_nm, dtype=float)
         self.max_delta_nm = config.torque_rate_max_nm_per_s * dt_s
         self._last_no_gravity = np.zeros(len(config.torque_max_nm))
-        self._out = np.zeros(len(config.torque_max_nm))
+        self.output = np.zeros(len(config.torque_max_nm))
 
     def reset(self, tau_no_gravity: np.ndarray | None = None) -> None:
         """Set the previously commanded torque without gravity (default 0) [Nm]."""
@@ -80,7 +80,7 @@ class TorqueLimiter:
         Returns:
             The torque to apply (7,) [Nm]; an internal buffer, overwritten on the next call.
         """
-        out = self._out
+        out = self.output
         limit_rate(tau_no_gravity, self._last_no_gravity, self.max_delta_nm, out=out)
         out += tau_gravity
         saturate(out, self.tau_max, out=out)

@@ -1,0 +1,90 @@
+"""Per-tick cost of ``ImpactController.compute`` excluding the dynamics update.
+
+Run ``OMP_NUM_THREADS=1 python -m impact_envs.control.bench``. The model is updated once at a
+fixed state and its ``update`` is then replaced by a no-op, so the timing covers only the
+controller core (impedance, estimator, slow filter, internal-model inference, limits). Learning
+ticks (one SGD step every ``update_every`` ticks while the gate is open) are timed separately.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import timeit
+
+import numpy as np
+import torch
+
+from impact_envs.control.config import ControllerConfig, EstimatorConfig
+from impact_envs.control.controller import ImpactController
+from impact_envs.control.fake_dynamics import ConstantArmDynamics
+from impact_envs.control.lie import matrix_to_quat
+from impact_envs.control.protocols import ArmDynamics
+
+Q_BENCH = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
+
+
+def _dynamics(use_fake: bool) -> tuple[ArmDynamics, str]:
+    if not use_fake:
+        try:
+            from impact_envs.robot.dynamics import PinocchioArm
+
+            return PinocchioArm(), "PinocchioArm"
+        except ImportError:
+            pass
+    return ConstantArmDynamics(), "ConstantArmDynamics"
+
+
+def _time_us(fn, number: int, repeat: int) -> float:
+    """Best of ``repeat`` runs of ``number`` calls, per call [us] of process CPU time.
+
+    CPU time rather than wall time, so that other processes on a shared machine do not count.
+    """
+    runs = timeit.repeat(fn, number=number, repeat=repeat, timer=time.process_time)
+    return min(runs) / number * 1e6
+
+
+def run(kind: str, use_fake: bool, number: int, repeat: int) -> dict[str, float]:
+    """Return per-call timings [us] of the dynamics update and of ``compute`` without it."""
+    dyn, name = _dynamics(use_fake)
+    q, dq = Q_BENCH.copy(), np.full(7, 0.01)
+    dyn.update(q, dq)
+    t_update = _time_us(lambda: dyn.update(q, dq), number, repeat)
+    pos, quat, tau = dyn.pos_ee_world.copy() + 0.01, matrix_to_quat(dyn.rot_ee_world), dyn.gravity
+    cfg = ControllerConfig(estimator=EstimatorConfig(kind=kind))
+    ctrl = ImpactController(dyn, cfg, mode="impact")
+    ctrl.reset(q)
+    dyn.update = lambda q_, dq_: None  # type: ignore[method-assign]
+    for _ in range(100):
+        ctrl.compute(q, dq, tau, pos, quat)
+    t_compute = _time_us(lambda: ctrl.compute(q, dq, tau, pos, quat), number, repeat)
+    model = ctrl.internal_model
+    x, target, mask = model.history_input().copy(), np.zeros(6, np.float32), np.ones(6, np.float32)
+    t_sgd = _time_us(lambda: model.train_step(x, target, mask), max(number // 20, 10), repeat)
+    return {
+        "dynamics": name,
+        "update_us": t_update,
+        "compute_us": t_compute,
+        "sgd_step_us": t_sgd,
+    }
+
+
+def main(argv: list[str] | None = None) -> None:
+    """CLI entry point: print the timings."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--estimator", choices=("residual", "momentum"), default="residual")
+    parser.add_argument("--fake", action="store_true", help="use ConstantArmDynamics")
+    parser.add_argument("--number", type=int, default=5000)
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args(argv)
+    torch.set_num_threads(1)
+    res = run(args.estimator, args.fake, args.number, args.repeat)
+    print(
+        f"{res['dynamics']} ({args.estimator}): dynamics.update {res['update_us']:.1f} us, "
+        f"compute() without update {res['compute_us']:.1f} us, "
+        f"one SGD step {res['sgd_step_us']:.0f} us (every update_every ticks while learning)"
+    )
+
+
+if __name__ == "__main__":
+    main()
