@@ -12,7 +12,7 @@ __version__ = "0.1.0"
 ENV_IDS = ("IMPACT/Hammer-v0",)
 
 _ENTRY_POINTS = {
-    "IMPACT/Hammer-v0": ("impact_envs.envs.hammer:HammerEnv", 600),
+    "IMPACT/Hammer-v0": ("impact_envs.envs.hammer:HammerEnv", 750),
 }
 
 for _env_id, (_entry, _steps) in _ENTRY_POINTS.items():

@@ -52,9 +52,14 @@ def check_env_id(env_id: str) -> str:
 
 
 def make_env(env_id: str, controller: str) -> gym.Env:
-    """``gym.make(env_id, controller=controller)`` with errors turned into ``ImpactError``."""
+    """``gym.make(env_id, controller=controller)`` with errors turned into ``ImpactError``.
+
+    IMPACT envs end an episode at success (``terminate_on_success=True``): success is then
+    final, and a sweep does not spend the remaining steps of solved episodes.
+    """
+    extra = {"terminate_on_success": True} if env_id.split(":")[-1].startswith("IMPACT/") else {}
     try:
-        return gym.make(env_id, controller=controller)
+        return gym.make(env_id, controller=controller, **extra)
     except ImpactError:
         raise
     except Exception as exc:  # noqa: BLE001 - env construction failed: report it in one line

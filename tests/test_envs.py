@@ -109,7 +109,7 @@ def test_mass_is_set_from_nominal_not_compounded():
         ({"controller": "pid"}, "valid choices: impact, impedance"),
         ({"estimator": "kalman"}, "valid choices: residual, momentum"),
         ({"object_mass": -1.0}, "valid: 0.05 to 12.0 kg"),
-        ({"render_mode": "human"}, "valid choices: rgb_array"),
+        ({"render_mode": "depth"}, "valid choices: rgb_array"),
     ],
 )
 def test_bad_kwargs_give_one_line_errors(kwargs, match):
@@ -122,3 +122,10 @@ def test_bad_reset_option():
     env = gym.make("IMPACT/Hammer-v0")
     with pytest.raises(InvalidArgumentError, match="valid: object_mass"):
         env.reset(seed=0, options={"friction": 1.0})
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_registered_episode_length_matches_task(env_id):
+    env = gym.make(env_id)
+    assert env.spec.max_episode_steps == env.unwrapped.task.max_episode_steps
+    env.close()

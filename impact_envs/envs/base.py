@@ -232,8 +232,11 @@ class ImpactEnv(gym.Env):
         m = metrics or {"energy_j": 0.0, "peak_torque_nm": 0.0,
                         "peak_robot_contact_force_n": 0.0, "peak_object_contact_force_n": 0.0}
         info.update(m)
+        # safety: robot-environment contact, or object-environment contact in excess of the
+        # object's own weight resting on a support (impacts, pressing, dragging)
+        weight = 9.81 * self._episode_params.get("object_mass", 0.0)
         info["peak_contact_force_n"] = max(m["peak_robot_contact_force_n"],
-                                           m["peak_object_contact_force_n"])
+                                           m["peak_object_contact_force_n"] - weight, 0.0)
         info.update(self.task.info(self.sim))
         return info
 

@@ -41,11 +41,11 @@ class HammerEnv(ImpactEnv):
 
     ## Randomization
     From ``env.np_random`` at reset: hammer COM x ∈ [0.36, 0.44] m, y ∈ [0.14, 0.22] m, yaw
-    ±30°; basket centre x ∈ [0.38, 0.44] m, y ∈ [−0.27, −0.21] m; initial joints home ± 0.03 rad;
+    ±30°; basket centre x ∈ [0.33, 0.38] m, y ∈ [−0.27, −0.21] m; initial joints home ± 0.03 rad;
     torque-sensor offsets. The mass comes from ``object_mass`` or ``reset(options=...)``.
 
     ## Episode end
-    Truncation after 600 steps (20 s); termination on success only with
+    Truncation after 750 steps (25 s); termination on success only with
     ``terminate_on_success=True``. ``SimulationError`` if the physics diverges.
 
     ## Arguments

@@ -58,7 +58,7 @@ class PickPlaceSpec:
     reach_tol_m: float = 0.015
     lift_margin_m: float = 0.04
     stiffness_z_n_per_m: float = 400.0
-    timeouts_steps: tuple[int, ...] = (90, 60, 18, 300, 150, 120, 15, 10_000)
+    timeouts_steps: tuple[int, ...] = (90, 60, 18, 450, 150, 120, 15, 10_000)
 
 
 def _yaw_frame(direction: np.ndarray) -> np.ndarray:

@@ -24,15 +24,15 @@ class HammerTask(Task):
     scene_xml = "hammer_scene.xml"
     object_bodies = ("hammer",)
     params = (TaskParam("object_mass", 0.2, 0.05, 12.0, "kg"),)
-    max_episode_steps = 600
+    max_episode_steps = 750
     workspace_low = np.array([0.15, -0.45, 0.0])
     workspace_high = np.array([0.70, 0.45, 0.60])
 
     hammer_xy_low = np.array([0.36, 0.14])
     hammer_xy_high = np.array([0.44, 0.22])
     hammer_yaw_max_rad = np.pi / 6
-    basket_xy_low = np.array([0.38, -0.27])
-    basket_xy_high = np.array([0.44, -0.21])
+    basket_xy_low = np.array([0.33, -0.27])
+    basket_xy_high = np.array([0.38, -0.21])
 
     def bind(self, sim: FrankaSim) -> None:
         m = sim.model
