@@ -1,6 +1,13 @@
-"""Controller core of IMPACT: pure NumPy / torch, no MuJoCo (see docs/controller.md)."""
+"""Controller core of IMPACT: pure NumPy / torch, no MuJoCo (see docs/controller.md).
+
+Importing a submodule such as ``impact_envs.control.lie`` does not import torch; the
+controller classes are loaded on first access (``from impact_envs.control import
+ImpactController``).
+"""
 
 from __future__ import annotations
+
+from typing import Any
 
 from impact_envs.control.config import (
     ControllerConfig,
@@ -10,7 +17,6 @@ from impact_envs.control.config import (
     LimitsConfig,
     SlowWrenchConfig,
 )
-from impact_envs.control.controller import ControllerSignals, ImpactController
 from impact_envs.control.protocols import ArmDynamics
 
 __all__ = [
@@ -24,3 +30,14 @@ __all__ = [
     "LimitsConfig",
     "SlowWrenchConfig",
 ]
+
+_LAZY = {"ImpactController", "ControllerSignals"}
+
+
+def __getattr__(name: str) -> Any:
+    """Load the torch-dependent controller classes on first access."""
+    if name in _LAZY:
+        from impact_envs.control import controller
+
+        return getattr(controller, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
