@@ -75,18 +75,25 @@ def main(argv: list[str] | None = None) -> None:
     rtf = {}
     for controller in ("impedance", "impact"):
         env, rtf[controller], start, log = _run_env(
-            args.env, controller, args.steps, args.seed, args.mass)
+            args.env, controller, args.steps, args.seed, args.mass
+        )
     raw = _replay_raw(env, start, log)
-    print(f"env {args.env}, {args.steps} policy steps ({len(log)} physics ticks), "
-          f"mass {args.mass} kg, seed {args.seed}")
+    print(
+        f"env {args.env}, {args.steps} policy steps ({len(log)} physics ticks), "
+        f"mass {args.mass} kg, seed {args.seed}"
+    )
     print(f"{'run':<28}{'real-time factor':>18}{'vs raw mj_step':>16}")
     print(f"{'raw mj_step (replay)':<28}{raw:>17.1f}x{1.0:>15.2f}x")
     for controller in ("impedance", "impact"):
-        print(f"{'env, controller=' + controller:<28}{rtf[controller]:>17.1f}x"
-              f"{rtf[controller] / raw:>15.2f}x")
+        print(
+            f"{'env, controller=' + controller:<28}{rtf[controller]:>17.1f}x"
+            f"{rtf[controller] / raw:>15.2f}x"
+        )
     overhead = 1.0 / rtf["impact"] - 1.0 / raw
-    print(f"IMPACT controller+sensing overhead per simulated second: {overhead:.3f} s "
-          f"({overhead * raw:.2f}x the physics cost)")
+    print(
+        f"IMPACT controller+sensing overhead per simulated second: {overhead:.3f} s "
+        f"({overhead * raw:.2f}x the physics cost)"
+    )
 
 
 if __name__ == "__main__":

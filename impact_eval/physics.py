@@ -52,8 +52,13 @@ class Rig:
         pos, rot = self.sim.tcp_pose()
         return pos, matrix_to_quat(rot)
 
-    def run(self, pos: np.ndarray, quat: np.ndarray, seconds: float,
-            wrench_on_tcp: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+    def run(
+        self,
+        pos: np.ndarray,
+        quat: np.ndarray,
+        seconds: float,
+        wrench_on_tcp: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> None:
         """Hold the target for ``seconds``, optionally applying (force, torque) at the TCP."""
         for _ in range(round(seconds / self.sim.dt)):
             if wrench_on_tcp is not None:
@@ -68,8 +73,9 @@ def _apply_wrench_at_tcp(sim: FrankaSim, force: np.ndarray, torque: np.ndarray) 
     sim.data.xfrc_applied[hand] = np.concatenate([force, torque + np.cross(lever, force)])
 
 
-def wrench_recovery(estimator: str, n_poses: int = 5, seed: int = 0,
-                    settle_s: float = 1.0, measure_s: float = 4.0) -> list[dict[str, float]]:
+def wrench_recovery(
+    estimator: str, n_poses: int = 5, seed: int = 0, settle_s: float = 1.0, measure_s: float = 4.0
+) -> list[dict[str, float]]:
     """Force/torque estimation errors [N, Nm] at steady state in ``n_poses`` random poses."""
     rng = np.random.default_rng(seed)
     rows = []
@@ -84,17 +90,21 @@ def wrench_recovery(estimator: str, n_poses: int = 5, seed: int = 0,
         torque = rng.uniform(-1.0, 1.0, 3) * 1.0
         rig.run(target_pos, target_quat, measure_s, (force, torque))
         est = rig.controller.signals.wrench_slow_world
-        rows.append({
-            "pose": i, "estimator": estimator,
-            "force_err_n": float(np.linalg.norm(est[:3] + force)),
-            "torque_err_nm": float(np.linalg.norm(est[3:] + torque)),
-            "force_applied_n": float(np.linalg.norm(force)),
-        })
+        rows.append(
+            {
+                "pose": i,
+                "estimator": estimator,
+                "force_err_n": float(np.linalg.norm(est[:3] + force)),
+                "torque_err_nm": float(np.linalg.norm(est[3:] + torque)),
+                "force_applied_n": float(np.linalg.norm(force)),
+            }
+        )
     return rows
 
 
-def payload_hold(mode: str, mass_kg: float = 5.0, hold_s: float = 3.0, seed: int = 0,
-                 estimator: str = "residual") -> dict[str, float]:
+def payload_hold(
+    mode: str, mass_kg: float = 5.0, hold_s: float = 3.0, seed: int = 0, estimator: str = "residual"
+) -> dict[str, float]:
     """Sag [m] of the TCP below its fixed target after ``hold_s`` holding ``mass_kg``."""
     rig = Rig.build("payload_scene.xml", mode, estimator, seed)
     model = rig.sim.model
@@ -110,10 +120,14 @@ def payload_hold(mode: str, mass_kg: float = 5.0, hold_s: float = 3.0, seed: int
         control_tick(rig.sim, rig.controller, rig.rng, target_pos, target_quat, -1.0)
         sag.append(target_pos[2] - rig.sim.tcp_pose()[0][2])
     sag_arr = np.array(sag)
-    return {"mode": mode, "mass_kg": mass_kg, "final_sag_m": float(sag_arr[-1]),
-            "max_sag_m": float(sag_arr.max()),
-            "final_error_m": float(np.linalg.norm(target_pos - rig.sim.tcp_pose()[0])),
-            "expected_impedance_sag_m": mass_kg * 9.81 / 400.0}
+    return {
+        "mode": mode,
+        "mass_kg": mass_kg,
+        "final_sag_m": float(sag_arr[-1]),
+        "max_sag_m": float(sag_arr.max()),
+        "final_error_m": float(np.linalg.norm(target_pos - rig.sim.tcp_pose()[0])),
+        "expected_impedance_sag_m": mass_kg * 9.81 / 400.0,
+    }
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -126,15 +140,19 @@ def main(argv: list[str] | None = None) -> None:
     print("|---|---|---|---|---|")
     for est in ("residual", "momentum"):
         for r in wrench_recovery(est, args.poses, args.seed):
-            print(f"| {est} | {r['pose']} | {r['force_applied_n']:.1f} | "
-                  f"{r['force_err_n']:.3f} | {r['torque_err_nm']:.4f} |")
+            print(
+                f"| {est} | {r['pose']} | {r['force_applied_n']:.1f} | "
+                f"{r['force_err_n']:.3f} | {r['torque_err_nm']:.4f} |"
+            )
     print("\n## 5 kg payload held for 3 s at a fixed target (noise on)")
     print("| controller | final sag [mm] | max sag [mm] | final error [mm] | m g / K [mm] |")
     print("|---|---|---|---|---|")
     for mode in ("impedance", "impact"):
         r = payload_hold(mode, seed=args.seed)
-        print(f"| {mode} | {1e3 * r['final_sag_m']:.1f} | {1e3 * r['max_sag_m']:.1f} | "
-              f"{1e3 * r['final_error_m']:.1f} | {1e3 * r['expected_impedance_sag_m']:.1f} |")
+        print(
+            f"| {mode} | {1e3 * r['final_sag_m']:.1f} | {1e3 * r['max_sag_m']:.1f} | "
+            f"{1e3 * r['final_error_m']:.1f} | {1e3 * r['expected_impedance_sag_m']:.1f} |"
+        )
 
 
 if __name__ == "__main__":

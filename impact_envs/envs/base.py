@@ -168,7 +168,8 @@ class ImpactEnv(gym.Env):
     def step(self, action: np.ndarray):
         pos1, quat1, gripper = self._decode_action(action)
         pos0, quat0 = self._target_pos, self._target_quat
-        metrics = self._run_ticks(pos0, quat0, pos1, quat1, gripper)
+        wrench_cmd, learn_mask = self.task.control_inputs(self.sim, np.asarray(action))
+        metrics = self._run_ticks(pos0, quat0, pos1, quat1, gripper, wrench_cmd, learn_mask)
         self._target_pos, self._target_quat, self._gripper_cmd = pos1, quat1, gripper
         self._step_count += 1
         success = bool(self.task.is_success(self.sim))
@@ -176,7 +177,9 @@ class ImpactEnv(gym.Env):
         terminated = bool(success and self.terminate_on_success)
         return self._observation(), float(success), terminated, False, self._info(success, metrics)
 
-    def _run_ticks(self, pos0, quat0, pos1, quat1, gripper: float) -> dict[str, float]:
+    def _run_ticks(self, pos0, quat0, pos1, quat1, gripper: float,
+                   wrench_cmd: np.ndarray | None, learn_mask: np.ndarray | None
+                   ) -> dict[str, float]:
         sim, ctrl, rng, task = self.sim, self.controller, self.np_random, self.task
         n = ticks_for_step(self._step_count)
         dt = sim.dt
@@ -186,7 +189,7 @@ class ImpactEnv(gym.Env):
             pos = pos0 + alpha * (pos1 - pos0)
             quat = slerp(quat0, quat1, alpha)
             task.before_tick(sim, float(sim.data.time))
-            q, dq = control_tick(sim, ctrl, rng, pos, quat, gripper)
+            q, dq = control_tick(sim, ctrl, rng, pos, quat, gripper, wrench_cmd, learn_mask)
             qd = sim.data.qvel[sim.arm_dof]
             energy += abs(float(np.dot(sim.tau_applied, qd))) * dt
             peak_tau = max(peak_tau, float(np.abs(sim.tau_applied).max()))

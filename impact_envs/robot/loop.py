@@ -19,11 +19,12 @@ def control_tick(
     quat_target_world: np.ndarray,
     gripper_cmd: float,
     wrench_cmd_world: np.ndarray | None = None,
+    learn_mask: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Run one control tick; return the sensed ``(q, dq)`` the controller used."""
     q, dq, tau_meas = sim.read_sensors(rng)
     tau = controller.compute(q, dq, tau_meas, pos_target_world, quat_target_world,
-                             wrench_cmd_world=wrench_cmd_world,
+                             wrench_cmd_world=wrench_cmd_world, learn_mask=learn_mask,
                              gripper_width_m=sim.gripper_width())
     sim.apply(tau, gripper_cmd)
     sim.step()

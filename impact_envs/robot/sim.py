@@ -22,6 +22,14 @@ ASSETS = Path(__file__).resolve().parent.parent / "assets"
 GROUP_OTHER, GROUP_ROBOT, GROUP_OBJECT = 0, 1, 2
 
 
+def _as_slice(indices: list[int]) -> slice | np.ndarray:
+    """A slice for contiguous ascending indices (cheaper to index with), else an index array."""
+    idx = np.asarray(indices, dtype=int)
+    if np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
+        return slice(int(idx[0]), int(idx[0]) + idx.size)
+    return idx
+
+
 @dataclass(frozen=True)
 class SensorNoise:
     """Noise of the simulated proprioception (docs/sensing.md gives the sources).
@@ -75,8 +83,8 @@ class FrankaSim:
         self.noise = noise or SensorNoise()
         m = self.model
         self.dt = float(m.opt.timestep)
-        self.arm_qpos = np.array([m.jnt_qposadr[m.joint(n).id] for n in ARM_JOINTS])
-        self.arm_dof = np.array([m.jnt_dofadr[m.joint(n).id] for n in ARM_JOINTS])
+        self.arm_qpos = _as_slice([m.jnt_qposadr[m.joint(n).id] for n in ARM_JOINTS])
+        self.arm_dof = _as_slice([m.jnt_dofadr[m.joint(n).id] for n in ARM_JOINTS])
         self.finger_qpos = np.array([m.jnt_qposadr[m.joint(n).id] for n in FINGER_JOINTS])
         self.arm_act = np.array([m.actuator(f"tau{i}").id for i in range(1, 8)])
         self.gripper_act = m.actuator("gripper").id
@@ -88,6 +96,7 @@ class FrankaSim:
         self._fric_type = int(mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF)
         self.tau_applied = np.zeros(7)
         self._fric_buffer = np.zeros(self.model.nv)
+        self._fric_rows_are_arm: bool | None = None
 
     def _classify_geoms(self, object_bodies: tuple[str, ...]) -> np.ndarray:
         m = self.model
@@ -141,16 +150,27 @@ class FrankaSim:
         return q, dq, tau
 
     def true_joint_torque(self) -> np.ndarray:
-        """Noise-free link-side joint torque of the last step [Nm] (a new array)."""
+        """Noise-free link-side joint torque of the last step [Nm] (a new array).
+
+        Motor torque + joint damping + the dof Coulomb-friction constraint force. MuJoCo orders
+        constraint rows equality first, then dof friction (``nf`` rows, in dof order).
+        """
         d = self.data
-        tau = d.qfrc_actuator[self.arm_dof] + d.qfrc_damper[self.arm_dof]
-        nefc = d.nefc
-        if nefc:
-            rows = np.flatnonzero(d.efc_type[:nefc] == self._fric_type)
-            fric = self._fric_buffer
-            fric[:] = 0.0
-            fric[d.efc_id[rows]] = d.efc_force[rows]
-            tau += fric[self.arm_dof]
+        dof = self.arm_dof
+        tau = d.qfrc_actuator[dof] + d.qfrc_damper[dof]
+        if d.nf:
+            start = d.ne
+            ids = d.efc_id[start:start + d.nf]
+            if self._fric_rows_are_arm is None:
+                self._fric_rows_are_arm = (
+                    isinstance(dof, slice) and ids.size >= 7
+                    and np.array_equal(ids[:7], np.arange(dof.start, dof.stop)))
+            if self._fric_rows_are_arm:
+                tau += d.efc_force[start:start + 7]
+            else:
+                fric = self._fric_buffer
+                fric[ids] = d.efc_force[start:start + d.nf]
+                tau += fric[dof]
         return tau
 
     def gripper_width(self) -> float:

@@ -121,6 +121,18 @@ class Task(ABC):
     def before_tick(self, sim: FrankaSim, time_s: float) -> None:  # noqa: B027
         """Hook run before every physics tick (e.g. external disturbances). Default: nothing."""
 
+    def control_inputs(
+        self, sim: FrankaSim, action: np.ndarray
+    ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Per policy step: explicit commanded wrench and internal-model learning mask.
+
+        Returns ``(wrench_cmd_world, learn_mask)``: an explicit wrench the robot should apply
+        to the environment (robot-on-environment sign, [N, Nm], e.g. a desired pressing force
+        for hybrid force control) and 6 bools (False freezes internal-model learning on that
+        axis). Default: ``(None, None)`` (pure pose tracking, learning on every axis).
+        """
+        return None, None
+
     def info(self, sim: FrankaSim) -> dict[str, float | bool]:
         """Extra task-specific per-step info. Default: none."""
         return {}
