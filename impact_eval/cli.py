@@ -17,6 +17,26 @@ from impact_envs.errors import ImpactError, InvalidArgumentError
 
 PROG = "impact-eval"
 
+QUICK_DEFAULTS = {
+    "env": "IMPACT/Hammer-v0",
+    "grid": "0.2,2.5,5,7.5,10",
+    "episodes": 4,
+    "out": Path("results/quickstart"),
+}
+"""The embedded defaults of ``--quick`` (the README's main job); methods: see quick_methods."""
+
+
+def quick_methods(env_id: str) -> str:
+    """The learned methods when their checkpoints ship with the package, else scripted ones."""
+    from impact_eval.methods import checkpoint_dir
+
+    try:
+        for variant in ("vanilla", "augmented"):
+            checkpoint_dir(env_id, variant)
+    except ImpactError:
+        return "scripted,scripted_impact"
+    return "vanilla_dp,augmented_dp,impact"
+
 
 class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one-line ``InvalidArgumentError``s (exit code 2)."""
@@ -33,14 +53,20 @@ def sweep_parser() -> argparse.ArgumentParser:
         "writes episodes.csv, summary.csv, run.json and plots/. "
         f"'{PROG} report DIR' redraws a finished sweep from its CSV.",
     )
-    p.add_argument("--env", required=True, help="env id, e.g. IMPACT/Hammer-v0")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="the main job on embedded defaults: Hammer, masses 0.2,2.5,5,7.5,10 kg, "
+        "4 episodes, the shipped DP checkpoints (scripted methods if none ship), "
+        "out results/quickstart; explicit options override",
+    )
+    p.add_argument("--env", help="env id, e.g. IMPACT/Hammer-v0")
     p.add_argument(
         "--method",
-        required=True,
         help="comma list: scripted, scripted_impact, "
         "vanilla_dp, augmented_dp, impact, sb3:<path.zip>",
     )
-    grid = p.add_mutually_exclusive_group(required=True)
+    grid = p.add_mutually_exclusive_group()
     grid.add_argument(
         "--masses",
         dest="grid",
@@ -54,8 +80,9 @@ def sweep_parser() -> argparse.ArgumentParser:
         default=None,
         help="name of the swept parameter; must match the env's (default: the env's)",
     )
-    p.add_argument("--episodes", type=int, default=20, help="episodes per (method, value)")
-    p.add_argument("--out", type=Path, required=True, help="output directory")
+    p.add_argument("--episodes", type=int, default=None,
+                   help="episodes per (method, value) (default 20)")
+    p.add_argument("--out", type=Path, help="output directory")
     p.add_argument(
         "--workers",
         type=int,
@@ -106,12 +133,32 @@ def run_report(argv: Sequence[str]) -> int:
     return 0
 
 
+def _with_defaults(a: argparse.Namespace) -> argparse.Namespace:
+    """Fill ``--quick`` defaults, or insist on the options a sweep needs."""
+    if a.quick:
+        for key, value in QUICK_DEFAULTS.items():
+            if getattr(a, key) is None:
+                setattr(a, key, value)
+        if a.method is None:
+            a.method = quick_methods(a.env)
+    missing = [f"--{k}" for k in ("env", "method", "out") if getattr(a, k) is None]
+    if a.grid is None:
+        missing.append("--masses/--param-values")
+    if missing:
+        raise InvalidArgumentError(
+            f"missing {', '.join(missing)}; give them or use --quick (see {PROG} --help)"
+        )
+    if a.episodes is None:
+        a.episodes = 20
+    return a
+
+
 def run_sweep_command(argv: Sequence[str]) -> int:
     """The sweep: validate, then run, then write the summary and plots."""
     from impact_eval.execute import execute
     from impact_eval.prepare import SweepRequest, prepare
 
-    a = sweep_parser().parse_args(argv)
+    a = _with_defaults(sweep_parser().parse_args(argv))
     request = SweepRequest(
         env_id=a.env,
         methods=a.method,

@@ -171,3 +171,21 @@ def test_bad_input_in_a_real_process(tmp_path: Path) -> None:
 def test_report_of_missing_dir_is_bad_input(tmp_path: Path) -> None:
     assert main(["report", str(tmp_path / "nothing")]) == 2
     assert not (tmp_path / "nothing").exists()
+
+
+def test_missing_sweep_options_name_quick(capsys):
+    from impact_eval.cli import main
+
+    assert main(["--env", "IMPACT/Hammer-v0", "--out", "/tmp/impact-never-written"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "missing --method, --masses/--param-values" in err and "--quick" in err
+    assert "\n" not in err
+
+
+def test_quick_fills_defaults_and_explicit_options_win():
+    from impact_eval.cli import _with_defaults, sweep_parser
+
+    args = _with_defaults(sweep_parser().parse_args(["--quick", "--episodes", "2"]))
+    assert args.env == "IMPACT/Hammer-v0" and args.grid == "0.2,2.5,5,7.5,10"
+    assert args.episodes == 2 and str(args.out) == "results/quickstart"
+    assert args.method in ("scripted,scripted_impact", "vanilla_dp,augmented_dp,impact")
