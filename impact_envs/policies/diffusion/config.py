@@ -1,0 +1,163 @@
+"""Hyper-parameters of the state-based Diffusion Policy baseline.
+
+Defaults follow the CPU recipe (docs/diffusion_policy.md): Diffusion Policy's low-dim U-Net
+recipe (Chi et al.) with a smaller net ``(64, 128, 256)`` and DDIM-10 sampling. Times are in
+policy steps (1/30 s each).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from impact_envs.errors import InvalidArgumentError, check_choice
+
+DEFAULT_OBS_KEYS: tuple[str, ...] = (
+    "ee_pos",
+    "ee_rot6d",
+    "gripper_width",
+    "object_pos",
+    "object_rot6d",
+    "goal_pos",
+)
+"""Observation keys the policy is conditioned on by default (joint states are left out)."""
+
+BETA_SCHEDULES = ("squaredcos_cap_v2", "linear", "scaled_linear")
+PREDICTION_TYPES = ("epsilon", "sample")
+
+
+@dataclass(frozen=True)
+class DiffusionConfig:
+    """Network, diffusion and training hyper-parameters.
+
+    Attributes:
+        obs_keys: Env observation keys concatenated (in this order) into the state vector.
+        n_obs_steps: To, number of past observations conditioning the policy [steps].
+        horizon: Tp, length of the predicted action sequence [steps]; must be divisible by
+            the U-Net's down-sampling factor ``2 ** (len(down_dims) - 1)``.
+        n_action_steps: Ta, actions executed per prediction (receding horizon) [steps];
+            ``Ta <= Tp - To + 1``.
+        down_dims: Channels of the U-Net levels (one down-sampling between levels).
+        kernel_size: Temporal convolution kernel size (odd).
+        n_groups: GroupNorm groups; must divide every entry of ``down_dims``.
+        diffusion_step_embed_dim: Size of the sinusoidal diffusion-step embedding.
+        num_train_timesteps: Number of diffusion steps of the forward (noising) process.
+        beta_schedule: diffusers beta schedule name.
+        prediction_type: What the network predicts: ``epsilon`` (noise) or ``sample``.
+        clip_sample: Clip the denoised sample to ``[-1, 1]`` (normalized action space).
+        num_inference_steps: DDIM steps at rollout.
+        range_eps: Normalizer range below which a dimension counts as constant [data units].
+        batch_size: Training windows per optimizer step.
+        lr: Peak AdamW learning rate.
+        betas: AdamW (beta1, beta2).
+        weight_decay: AdamW decoupled weight decay.
+        lr_warmup_steps: Linear warm-up length before the cosine decay [optimizer steps].
+        ema_power: EMA decay exponent; decay = 1 - (1 + step / ema_inv_gamma) ** -ema_power.
+        ema_inv_gamma: EMA decay step scale [optimizer steps].
+        ema_min: Lower bound of the EMA decay.
+        ema_max: Upper bound of the EMA decay.
+        seed: Seed of weight initialization, batch sampling and training noise.
+    """
+
+    obs_keys: tuple[str, ...] = DEFAULT_OBS_KEYS
+    n_obs_steps: int = 2
+    horizon: int = 16
+    n_action_steps: int = 8
+    down_dims: tuple[int, ...] = (64, 128, 256)
+    kernel_size: int = 5
+    n_groups: int = 8
+    diffusion_step_embed_dim: int = 64
+    num_train_timesteps: int = 100
+    beta_schedule: str = "squaredcos_cap_v2"
+    prediction_type: str = "epsilon"
+    clip_sample: bool = True
+    num_inference_steps: int = 10
+    range_eps: float = 1e-4
+    batch_size: int = 256
+    lr: float = 1e-4
+    betas: tuple[float, float] = (0.95, 0.999)
+    weight_decay: float = 1e-6
+    lr_warmup_steps: int = 500
+    ema_power: float = 0.75
+    ema_inv_gamma: float = 1.0
+    ema_min: float = 0.0
+    ema_max: float = 0.9999
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "obs_keys", tuple(self.obs_keys))
+        object.__setattr__(self, "down_dims", tuple(int(d) for d in self.down_dims))
+        object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
+        check_choice("beta_schedule", self.beta_schedule, BETA_SCHEDULES)
+        check_choice("prediction_type", self.prediction_type, PREDICTION_TYPES)
+        self._check_positive()
+        self._check_shapes()
+
+    def _check_positive(self) -> None:
+        names = ("n_obs_steps", "horizon", "n_action_steps", "kernel_size", "n_groups")
+        names += ("diffusion_step_embed_dim", "num_train_timesteps", "num_inference_steps")
+        names += ("batch_size",)
+        for name in names:
+            if getattr(self, name) < 1:
+                raise InvalidArgumentError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if not self.obs_keys:
+            raise InvalidArgumentError("obs_keys must name at least one observation key")
+        if self.lr <= 0 or self.range_eps <= 0:
+            raise InvalidArgumentError("lr and range_eps must be > 0")
+        if not 0.0 <= self.ema_min <= self.ema_max <= 1.0:
+            raise InvalidArgumentError("need 0 <= ema_min <= ema_max <= 1")
+        if self.num_inference_steps > self.num_train_timesteps:
+            raise InvalidArgumentError("num_inference_steps must be <= num_train_timesteps")
+
+    def _check_shapes(self) -> None:
+        if not self.down_dims:
+            raise InvalidArgumentError("down_dims must have at least one level")
+        if self.horizon % self.downsample_factor:
+            raise InvalidArgumentError(
+                f"horizon {self.horizon} must be divisible by {self.downsample_factor}"
+                f" (2 ** (len(down_dims) - 1))"
+            )
+        if self.n_action_steps > self.horizon - self.n_obs_steps + 1:
+            raise InvalidArgumentError(
+                f"n_action_steps must be <= horizon - n_obs_steps + 1"
+                f" = {self.horizon - self.n_obs_steps + 1}"
+            )
+        if self.kernel_size % 2 == 0:
+            raise InvalidArgumentError(f"kernel_size must be odd, got {self.kernel_size}")
+        if any(d % self.n_groups for d in self.down_dims):
+            raise InvalidArgumentError(f"n_groups {self.n_groups} must divide every down_dim")
+
+    @property
+    def downsample_factor(self) -> int:
+        """Temporal down-sampling of the U-Net bottleneck (``2 ** (levels - 1)``)."""
+        return 2 ** (len(self.down_dims) - 1)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return a JSON-serialisable dict (tuples become lists)."""
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in self._items()}
+
+    def _items(self) -> list[tuple[str, Any]]:
+        return [(f.name, getattr(self, f.name)) for f in dataclasses.fields(self)]
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> DiffusionConfig:
+        """Build a config from ``to_dict`` output; unknown keys raise InvalidArgumentError."""
+        names = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(set(data) - set(names))
+        if unknown:
+            raise InvalidArgumentError(
+                f"unknown DiffusionConfig keys {unknown}; valid keys: {', '.join(names)}"
+            )
+        return cls(**data)
+
+    def to_json(self, path: str | Path) -> None:
+        """Write the config as indented JSON to ``path``."""
+        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> DiffusionConfig:
+        """Read a config written by ``to_json``."""
+        return cls.from_dict(json.loads(Path(path).read_text()))

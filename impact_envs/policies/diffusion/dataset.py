@@ -1,0 +1,247 @@
+"""Demonstration storage (Diffusion Policy's zarr replay layout) and the windowed sampler.
+
+Layout of ``DATA.zarr``::
+
+    data/<obs_key>          (N, d_key) float32   one array per env observation key
+    data/action             (N, 10)    float32   expert action at the same step
+    meta/episode_ends       (E,) int64           exclusive end index of each episode in N
+    meta/episode_param      (E,) float64         randomized parameter (e.g. object mass [kg])
+    meta/episode_seed       (E,) int64           env reset seed
+    meta/episode_success    (E,) bool            expert succeeded
+    meta/episode_attempt    (E,) int64           collection attempt index (for --resume)
+    attrs                   env_id, param_name, controller, expert options, versions, ...
+
+Episodes are appended one at a time; ``meta/episode_ends`` is written last, so an interrupted
+append is discarded (truncated) when the store is reopened.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+import zarr
+
+from impact_envs.errors import InvalidArgumentError
+
+FORMAT_VERSION = 1
+"""Version of the zarr layout above (stored in attrs['format_version'])."""
+ACTION_KEY = "action"
+META_DTYPES = {
+    "episode_param": "float64",
+    "episode_seed": "int64",
+    "episode_success": "bool",
+    "episode_attempt": "int64",
+}
+CHUNK_ROWS = 4096
+UNCHECKED_ATTRS = frozenset({"package_version", "n_attempts"})
+"""Attributes that may differ when a store is reopened for appending."""
+
+
+@dataclass(frozen=True)
+class EpisodeMeta:
+    """Per-episode metadata.
+
+    Attributes:
+        param: Randomized parameter value (object mass [kg] for Hammer/Dumbbell).
+        seed: Env reset seed.
+        success: Whether the expert succeeded.
+        attempt: Collection attempt index.
+    """
+
+    param: float
+    seed: int
+    success: bool
+    attempt: int
+
+
+class ReplayWriter:
+    """Append-only writer of the zarr layout (used by ``impact-collect``).
+
+    Args:
+        path: Store path (a directory ``*.zarr``).
+        obs_dims: ``{obs_key: d_key}`` of the env's flat observation arrays.
+        attrs: JSON-serialisable store attributes (env_id, param_name, ...).
+        append: Reopen an existing store (its attrs must match ``attrs`` on the keys given)
+            instead of creating a new one; an existing store without ``append`` is an error.
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        obs_dims: Mapping[str, int],
+        attrs: Mapping[str, Any],
+        *,
+        append: bool = False,
+    ) -> None:
+        self.path = Path(path)
+        self.obs_keys = tuple(obs_dims)
+        if append and self.path.exists():
+            self.root = zarr.open_group(str(self.path), mode="r+")
+            self._check_attrs(attrs)
+            self._truncate_partial()
+            return
+        if self.path.exists():
+            raise InvalidArgumentError(f"{self.path} exists; pass --resume to append or remove it")
+        self.root = zarr.open_group(str(self.path), mode="w")
+        self.root.attrs.update({**attrs, "format_version": FORMAT_VERSION})
+        data, meta = self.root.require_group("data"), self.root.require_group("meta")
+        for key, dim in {**obs_dims, ACTION_KEY: 10}.items():
+            data.zeros(name=key, shape=(0, dim), chunks=(CHUNK_ROWS, dim), dtype="float32")
+        for key, dtype in {**META_DTYPES, "episode_ends": "int64"}.items():
+            meta.zeros(name=key, shape=(0,), chunks=(CHUNK_ROWS,), dtype=dtype)
+
+    def _check_attrs(self, attrs: Mapping[str, Any]) -> None:
+        stored = dict(self.root.attrs)
+        for key, value in attrs.items():
+            if key in stored and key not in UNCHECKED_ATTRS and stored[key] != value:
+                raise InvalidArgumentError(
+                    f"cannot resume {self.path}: attr {key!r} is {stored[key]!r}, not {value!r}"
+                )
+        missing = [k for k in self.obs_keys if k not in self.root["data"]]
+        if missing:
+            raise InvalidArgumentError(f"cannot resume {self.path}: missing data arrays {missing}")
+
+    def _truncate_partial(self) -> None:
+        ends = self.root["meta/episode_ends"][:]
+        n_steps = int(ends[-1]) if len(ends) else 0
+        for key in (*self.obs_keys, ACTION_KEY):
+            arr = self.root[f"data/{key}"]
+            arr.resize((n_steps, arr.shape[1]))
+        for key in META_DTYPES:
+            self.root[f"meta/{key}"].resize((len(ends),))
+
+    @property
+    def n_episodes(self) -> int:
+        """Number of complete episodes stored."""
+        return int(self.root["meta/episode_ends"].shape[0])
+
+    def attempts(self) -> np.ndarray:
+        """Attempt index of each stored episode ``(E,)``."""
+        return np.asarray(self.root["meta/episode_attempt"][:], dtype=np.int64)
+
+    def set_attrs(self, **attrs: Any) -> None:
+        """Update store attributes (e.g. the number of attempts made so far)."""
+        self.root.attrs.update(attrs)
+
+    def append_episode(
+        self, obs: Mapping[str, np.ndarray], actions: np.ndarray, meta: EpisodeMeta
+    ) -> None:
+        """Append one episode: ``obs[key]`` ``(T, d_key)``, ``actions`` ``(T, 10)``."""
+        length = int(actions.shape[0])
+        if length == 0 or any(np.shape(obs[k])[0] != length for k in self.obs_keys):
+            raise InvalidArgumentError(
+                "episode observations and actions must have equal length > 0"
+            )
+        ends = self.root["meta/episode_ends"]
+        start = int(ends[-1]) if ends.shape[0] else 0
+        for key in self.obs_keys:
+            self.root[f"data/{key}"].append(np.asarray(obs[key], dtype=np.float32), axis=0)
+        self.root[f"data/{ACTION_KEY}"].append(np.asarray(actions, dtype=np.float32), axis=0)
+        values = (meta.param, meta.seed, meta.success, meta.attempt)
+        for key, value in zip(META_DTYPES, values, strict=True):
+            self.root[f"meta/{key}"].append(np.asarray([value], dtype=META_DTYPES[key]))
+        ends.append(np.asarray([start + length], dtype=np.int64))
+
+
+@dataclass(frozen=True)
+class ReplayData:
+    """A whole demonstration store loaded into memory.
+
+    Attributes:
+        data: ``{key: (N, d)}`` float32 arrays, including ``"action"`` ``(N, 10)``.
+        episode_ends: ``(E,)`` exclusive end indices.
+        meta: ``{name: (E,)}`` per-episode metadata (``episode_param``, ``episode_seed``, ...).
+        attrs: Store attributes.
+    """
+
+    data: dict[str, np.ndarray]
+    episode_ends: np.ndarray
+    meta: dict[str, np.ndarray]
+    attrs: dict[str, Any]
+
+    @property
+    def n_episodes(self) -> int:
+        """Number of episodes E."""
+        return int(self.episode_ends.shape[0])
+
+    def obs_matrix(self, keys: Sequence[str]) -> np.ndarray:
+        """Concatenate observation arrays ``keys`` into ``(N, D_obs)``."""
+        missing = [k for k in keys if k not in self.data]
+        if missing:
+            raise InvalidArgumentError(
+                f"observation keys {missing} not in dataset; valid keys: {', '.join(self.data)}"
+            )
+        return np.concatenate([self.data[k] for k in keys], axis=1).astype(np.float32)
+
+
+def load_replay(path: str | Path) -> ReplayData:
+    """Load a store written by ``ReplayWriter`` (complete episodes only)."""
+    if not Path(path).exists():
+        raise InvalidArgumentError(f"dataset {path} does not exist")
+    root = zarr.open_group(str(path), mode="r")
+    ends = np.asarray(root["meta/episode_ends"][:], dtype=np.int64)
+    n_steps = int(ends[-1]) if len(ends) else 0
+    data = {k: np.asarray(a[:n_steps]) for k, a in root["data"].arrays()}
+    meta = {k: np.asarray(root[f"meta/{k}"][: len(ends)]) for k in META_DTYPES}
+    return ReplayData(data, ends, meta, dict(root.attrs))
+
+
+def window_indices(
+    episode_ends: np.ndarray, episodes: Sequence[int], n_obs_steps: int, horizon: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Global step indices of every training window, with DP-style edge padding.
+
+    There is one window per step t of each episode: observations t-To+1..t and actions
+    t-To+1..t-To+Tp, clamped into the episode (repeat the first step before the start, the
+    last step after the end). Action To-1 of a window is the one taken at the current step t.
+
+    Returns:
+        ``obs_idx`` ``(W, To)`` and ``act_idx`` ``(W, Tp)`` int64 indices into the N axis.
+    """
+    starts = np.concatenate([[0], episode_ends[:-1]])
+    obs_rows, act_rows = [], []
+    for ep in episodes:
+        start, end = int(starts[ep]), int(episode_ends[ep])
+        t = np.arange(start, end)[:, None]
+        first = t - (n_obs_steps - 1)
+        obs_rows.append(np.clip(first + np.arange(n_obs_steps), start, end - 1))
+        act_rows.append(np.clip(first + np.arange(horizon), start, end - 1))
+    if not obs_rows:
+        return np.zeros((0, n_obs_steps), np.int64), np.zeros((0, horizon), np.int64)
+    return np.concatenate(obs_rows).astype(np.int64), np.concatenate(act_rows).astype(np.int64)
+
+
+class WindowSampler:
+    """Random or indexed access to normalized training windows.
+
+    Args:
+        obs: Normalized flat observations ``(N, D_obs)``.
+        actions: Normalized actions ``(N, 10)``.
+        obs_idx: ``(W, To)`` from ``window_indices``.
+        act_idx: ``(W, Tp)`` from ``window_indices``.
+    """
+
+    def __init__(
+        self, obs: torch.Tensor, actions: torch.Tensor, obs_idx: np.ndarray, act_idx: np.ndarray
+    ) -> None:
+        self.obs, self.actions = obs, actions
+        self.obs_idx = torch.as_tensor(obs_idx, dtype=torch.long)
+        self.act_idx = torch.as_tensor(act_idx, dtype=torch.long)
+
+    def __len__(self) -> int:
+        return int(self.obs_idx.shape[0])
+
+    def get(self, windows: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Return ``(obs (B, To, D_obs), actions (B, Tp, 10))`` of window ids ``(B,)``."""
+        return self.obs[self.obs_idx[windows]], self.actions[self.act_idx[windows]]
+
+    def sample(
+        self, batch_size: int, generator: torch.Generator
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Draw ``batch_size`` windows uniformly with replacement."""
+        return self.get(torch.randint(len(self), (batch_size,), generator=generator))
