@@ -1,0 +1,115 @@
+"""Inference cost of the Diffusion Policy per env step (batched DDIM, amortized over Ta).
+
+Usage::
+
+    python -m impact_envs.policies.diffusion.bench [--checkpoint DIR] [--batch 32] [--threads 1]
+
+``measure_inference`` is the function to call next to the env step cost: it runs ``act`` on
+random observations for whole replanning cycles and reports the mean cost.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from impact_envs.policies.diffusion.config import DiffusionConfig
+from impact_envs.policies.diffusion.model import make_network
+from impact_envs.policies.diffusion.normalizer import AffineMap, Normalizer
+from impact_envs.policies.diffusion.policy import DiffusionPolicy
+
+DEFAULT_OBS_DIMS = {
+    "ee_pos": 3,
+    "ee_rot6d": 6,
+    "gripper_width": 1,
+    "object_pos": 3,
+    "object_rot6d": 6,
+    "goal_pos": 3,
+}
+
+
+@dataclass(frozen=True)
+class InferenceCost:
+    """Measured policy cost.
+
+    Attributes:
+        batch_size: Envs per ``act`` call.
+        ms_per_replan: One batched DDIM prediction for all envs [ms].
+        ms_per_batched_step: Mean ``act`` call, amortized over Ta steps [ms].
+        ms_per_env_step: ``ms_per_batched_step / batch_size`` [ms].
+    """
+
+    batch_size: int
+    ms_per_replan: float
+    ms_per_batched_step: float
+    ms_per_env_step: float
+
+
+def random_policy(cfg: DiffusionConfig | None = None, seed: int = 0) -> DiffusionPolicy:
+    """Untrained policy with identity normalization (same cost as a trained one)."""
+    cfg = cfg or DiffusionConfig()
+    obs_dims = {k: DEFAULT_OBS_DIMS.get(k, 3) for k in cfg.obs_keys}
+    obs_dim = sum(obs_dims.values())
+    torch.manual_seed(seed)
+    net = make_network(cfg, obs_dim)
+
+    def identity(dim: int) -> AffineMap:
+        return AffineMap(torch.ones(dim), torch.zeros(dim))
+
+    return DiffusionPolicy(cfg, net, Normalizer(identity(obs_dim), identity(10)), obs_dims)
+
+
+def measure_inference(
+    policy: DiffusionPolicy, batch_size: int = 32, cycles: int = 3
+) -> InferenceCost:
+    """Time ``cycles`` replanning cycles (Ta ``act`` calls each) after one warm-up cycle."""
+    rng = np.random.default_rng(0)
+    dims = policy.obs_dims
+    policy.reset(batch_size)
+    ta = policy.cfg.n_action_steps
+
+    def obs() -> dict[str, np.ndarray]:
+        return {k: rng.uniform(-1, 1, (batch_size, d)).astype(np.float32) for k, d in dims.items()}
+
+    for _ in range(ta):
+        policy.act(obs())
+    step_times = []
+    for _ in range(cycles * ta):
+        batch = obs()
+        start = time.perf_counter()
+        policy.act(batch)
+        step_times.append(time.perf_counter() - start)
+    replans = np.asarray(step_times).reshape(cycles, ta)[:, 0]
+    per_step = 1e3 * float(np.mean(step_times))
+    return InferenceCost(
+        batch_size, 1e3 * float(np.median(replans)), per_step, per_step / batch_size
+    )
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Print the inference cost of a checkpoint (or an untrained default-size policy)."""
+    parser = argparse.ArgumentParser(description="Diffusion Policy inference cost")
+    parser.add_argument("--checkpoint", help="policy folder (default: untrained default net)")
+    parser.add_argument("--batch", type=int, default=32, help="envs per act call")
+    parser.add_argument("--cycles", type=int, default=3, help="timed replanning cycles")
+    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads")
+    args = parser.parse_args(argv)
+    torch.set_num_threads(args.threads)
+    policy = DiffusionPolicy.load(args.checkpoint) if args.checkpoint else random_policy()
+    cost = measure_inference(policy, args.batch, args.cycles)
+    cfg = policy.cfg
+    print(
+        f"DDIM-{cfg.num_inference_steps}, Tp={cfg.horizon}, Ta={cfg.n_action_steps}, "
+        f"down_dims={cfg.down_dims}, batch={cost.batch_size}, threads={args.threads}"
+    )
+    print(f"  replan (one batched DDIM call): {cost.ms_per_replan:8.2f} ms")
+    print(f"  per batched env step (÷Ta):     {cost.ms_per_batched_step:8.2f} ms")
+    print(f"  per single env step (÷Ta÷B):    {cost.ms_per_env_step:8.3f} ms")
+
+
+if __name__ == "__main__":
+    main()

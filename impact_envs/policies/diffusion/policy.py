@@ -1,0 +1,192 @@
+"""``DiffusionPolicy``: batched receding-horizon rollout of a trained diffusion model.
+
+Timing per env (To = 2, Tp = 16, Ta = 8)::
+
+    step t:     |o_{t-1} o_t|                  observation history (first obs repeated)
+    prediction: |a_{t-1} a_t a_{t+1} ... a_{t+14}|   Tp actions, index To-1 is "now"
+    executed:         |a_t ... a_{t+7}|        Ta actions, one per ``act`` call
+
+All envs whose action queue is empty are replanned in one batched DDIM call. The initial noise
+of env i comes from its own generator seeded by ``(seed, i)`` at ``reset``, so a rollout is
+reproducible and does not depend on which other envs replan at the same step.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from safetensors.torch import load_file, save_file
+
+import impact_envs
+from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_envs.policies.diffusion.config import DiffusionConfig
+from impact_envs.policies.diffusion.model import denoise, make_inference_scheduler, make_network
+from impact_envs.policies.diffusion.network import ConditionalUnet1D
+from impact_envs.policies.diffusion.normalizer import Normalizer
+from impact_envs.policies.protocol import ACTION_DIM
+
+MODEL_FILE = "model.safetensors"
+CONFIG_FILE = "config.json"
+NORMALIZER_FILE = "normalizer.safetensors"
+META_FILE = "meta.json"
+CHECKPOINT_FORMAT = 1
+
+
+def env_generator(seed: int, index: int) -> torch.Generator:
+    """Generator of env ``index`` for policy seed ``seed``."""
+    state = np.random.SeedSequence([seed, index]).generate_state(1, dtype=np.uint64)[0]
+    return torch.Generator().manual_seed(int(state))
+
+
+class DiffusionPolicy:
+    """State-based Diffusion Policy implementing the ``Policy`` protocol.
+
+    Args:
+        cfg: Hyper-parameters (obs keys, To, Tp, Ta, DDIM steps).
+        net: The (EMA) U-Net.
+        normalizer: Observation/action normalizer of the training set.
+        obs_dims: ``{obs_key: d_key}`` for ``cfg.obs_keys`` (order given by ``cfg.obs_keys``).
+        seed: Seed of the sampling noise; reapplied at every ``reset``.
+        meta: Free-form JSON-serialisable training information (saved in meta.json).
+    """
+
+    def __init__(
+        self,
+        cfg: DiffusionConfig,
+        net: ConditionalUnet1D,
+        normalizer: Normalizer,
+        obs_dims: Mapping[str, int],
+        *,
+        seed: int = 0,
+        meta: Mapping[str, Any] | None = None,
+    ) -> None:
+        missing = [k for k in cfg.obs_keys if k not in obs_dims]
+        if missing:
+            raise InvalidArgumentError(f"obs_dims lacks keys {missing}; needs {cfg.obs_keys}")
+        self.cfg = cfg
+        self.net = net.eval()
+        self.normalizer = normalizer
+        self.obs_dims = {k: int(obs_dims[k]) for k in cfg.obs_keys}
+        if normalizer.obs.dim != sum(self.obs_dims.values()):
+            raise InvalidArgumentError("normalizer obs dim does not match obs_dims")
+        self.seed = seed
+        self.meta = dict(meta or {})
+        self.scheduler = make_inference_scheduler(cfg)
+        self.n_envs = 0
+
+    def reset(self, n_envs: int) -> None:
+        """Clear history and action queues of ``n_envs`` envs and reseed their noise."""
+        if n_envs < 1:
+            raise InvalidArgumentError(f"n_envs must be >= 1, got {n_envs}")
+        cfg = self.cfg
+        self.n_envs = n_envs
+        self._history = torch.zeros(n_envs, cfg.n_obs_steps, self.normalizer.obs.dim)
+        self._fresh = np.ones(n_envs, dtype=bool)
+        self._queue = np.zeros((n_envs, cfg.n_action_steps, ACTION_DIM), dtype=np.float32)
+        self._queue_pos = np.full(n_envs, cfg.n_action_steps)
+        self._generators = [env_generator(self.seed, i) for i in range(n_envs)]
+
+    def reset_envs(self, indices: np.ndarray | list[int]) -> None:
+        """Start a new episode in envs ``indices`` only (their generators continue)."""
+        self._fresh[indices] = True
+        self._queue_pos[indices] = self.cfg.n_action_steps
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """Return ``(B, 10)`` float32 actions for the batched observation ``obs``."""
+        flat = self._flat_obs(obs)
+        if self.n_envs != flat.shape[0]:
+            if self.n_envs:
+                raise InvalidArgumentError(f"got {flat.shape[0]} envs, reset was for {self.n_envs}")
+            self.reset(flat.shape[0])
+        self._push_history(flat)
+        replan = np.flatnonzero(self._queue_pos >= self.cfg.n_action_steps)
+        if replan.size:
+            self._queue[replan] = self.predict_chunk(replan)
+            self._queue_pos[replan] = 0
+        actions = self._queue[np.arange(self.n_envs), self._queue_pos].copy()
+        self._queue_pos += 1
+        return actions
+
+    def _flat_obs(self, obs: Mapping[str, np.ndarray]) -> torch.Tensor:
+        missing = [k for k in self.cfg.obs_keys if k not in obs]
+        if missing:
+            raise InvalidArgumentError(
+                f"observation lacks keys {missing}; needs {self.cfg.obs_keys}"
+            )
+        parts = [np.asarray(obs[k], dtype=np.float32) for k in self.cfg.obs_keys]
+        parts = [p.reshape(p.shape[0], -1) for p in parts]
+        return torch.from_numpy(np.concatenate(parts, axis=1))
+
+    def _push_history(self, flat: torch.Tensor) -> None:
+        self._history = torch.roll(self._history, shifts=-1, dims=1)
+        self._history[:, -1] = flat
+        fresh = torch.from_numpy(self._fresh)
+        self._history[fresh] = flat[fresh].unsqueeze(1).expand(-1, self.cfg.n_obs_steps, -1)
+        self._fresh[:] = False
+
+    def predict_chunk(self, envs: np.ndarray) -> np.ndarray:
+        """Sample and return the ``(len(envs), Ta, 10)`` actions to execute for ``envs``."""
+        cfg = self.cfg
+        noise = torch.stack(
+            [torch.randn(cfg.horizon, ACTION_DIM, generator=self._generators[i]) for i in envs]
+        )
+        obs = self.normalizer.obs.forward(self._history[torch.as_tensor(envs)])
+        with torch.inference_mode():
+            sample = denoise(self.net, self.scheduler, obs, noise)
+        actions = self.normalizer.action.inverse(sample)
+        start = cfg.n_obs_steps - 1
+        return actions[:, start : start + cfg.n_action_steps].numpy().astype(np.float32)
+
+    def save(self, directory: str | Path) -> None:
+        """Write model.safetensors, config.json, normalizer.safetensors and meta.json."""
+        path = Path(directory)
+        path.mkdir(parents=True, exist_ok=True)
+        state = {k: v.detach().cpu().contiguous() for k, v in self.net.state_dict().items()}
+        save_file(state, str(path / MODEL_FILE))
+        save_file(self.normalizer.state_dict(), str(path / NORMALIZER_FILE))
+        self.cfg.to_json(path / CONFIG_FILE)
+        meta = {
+            **self.meta,
+            "checkpoint_format": CHECKPOINT_FORMAT,
+            "package_version": impact_envs.__version__,
+            "obs_dims": self.obs_dims,
+            "action_dim": ACTION_DIM,
+        }
+        (path / META_FILE).write_text(json.dumps(meta, indent=2) + "\n")
+
+    @classmethod
+    def load(cls, directory: str | Path, *, seed: int = 0) -> DiffusionPolicy:
+        """Load a checkpoint written by ``save``; raises CheckpointError if missing or corrupt."""
+        path = Path(directory)
+        for name in (MODEL_FILE, CONFIG_FILE, NORMALIZER_FILE, META_FILE):
+            if not (path / name).is_file():
+                raise CheckpointError(f"checkpoint {path} is missing {name}")
+        try:
+            cfg = DiffusionConfig.from_json(path / CONFIG_FILE)
+            meta = json.loads((path / META_FILE).read_text())
+            obs_dims = {k: int(meta["obs_dims"][k]) for k in cfg.obs_keys}
+        except (ValueError, KeyError, TypeError) as exc:
+            raise CheckpointError(f"checkpoint {path} has bad config/meta: {exc}") from None
+        normalizer = Normalizer.from_state_dict(_read_tensors(path / NORMALIZER_FILE))
+        net = make_network(cfg, sum(obs_dims.values()))
+        try:
+            net.load_state_dict(_read_tensors(path / MODEL_FILE), strict=True)
+        except RuntimeError as exc:
+            summary = str(exc).splitlines()[0]
+            raise CheckpointError(f"{path / MODEL_FILE} does not match config: {summary}") from None
+        try:
+            return cls(cfg, net, normalizer, obs_dims, seed=seed, meta=meta)
+        except InvalidArgumentError as exc:
+            raise CheckpointError(f"checkpoint {path} is inconsistent: {exc}") from None
+
+
+def _read_tensors(path: Path) -> dict[str, torch.Tensor]:
+    try:
+        return load_file(str(path))
+    except Exception as exc:  # safetensors raises several error types on corrupt files
+        raise CheckpointError(f"cannot read {path}: {type(exc).__name__}") from None

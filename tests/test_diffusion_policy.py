@@ -1,0 +1,130 @@
+"""DiffusionPolicy: protocol behaviour, receding horizon, checkpoint round-trip and errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_envs.policies.diffusion.bench import measure_inference, random_policy
+from impact_envs.policies.diffusion.config import DiffusionConfig
+from impact_envs.policies.diffusion.policy import DiffusionPolicy
+from impact_envs.policies.protocol import Policy
+
+torch.set_num_threads(1)
+SMALL = DiffusionConfig(down_dims=(16, 32), diffusion_step_embed_dim=16, num_inference_steps=4)
+
+
+def _obs(policy: DiffusionPolicy, batch: int, seed: int) -> dict[str, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return {
+        k: rng.uniform(-1, 1, (batch, d)).astype(np.float32) for k, d in policy.obs_dims.items()
+    }
+
+
+def _rollout(policy: DiffusionPolicy, batch: int, steps: int) -> np.ndarray:
+    policy.reset(batch)
+    return np.stack([policy.act(_obs(policy, batch, t)) for t in range(steps)])
+
+
+def test_protocol_shapes_and_receding_horizon(monkeypatch):
+    policy = random_policy(SMALL)
+    assert isinstance(policy, Policy)
+    calls = []
+    original = policy.predict_chunk
+    monkeypatch.setattr(policy, "predict_chunk", lambda envs: calls.append(envs) or original(envs))
+    actions = _rollout(policy, batch=3, steps=17)
+    assert actions.shape == (17, 3, 10) and actions.dtype == np.float32
+    assert len(calls) == 3  # steps 0, 8, 16 with Ta = 8
+    policy.reset_envs([1])
+    policy.act(_obs(policy, 3, 0))
+    assert calls[-1].tolist() == [1]
+    with pytest.raises(InvalidArgumentError):
+        policy.act(_obs(policy, 2, 0))
+
+
+def test_first_observation_is_repeated():
+    policy = random_policy(SMALL)
+    policy.reset(2)
+    obs = _obs(policy, 2, 0)
+    policy.act(obs)
+    assert torch.equal(policy._history[:, 0], policy._history[:, 1])
+    policy.act(_obs(policy, 2, 1))
+    assert not torch.equal(policy._history[:, 0], policy._history[:, 1])
+
+
+def test_noise_per_env_is_independent_of_batch():
+    policy = random_policy(SMALL)
+    alone = _rollout(policy, batch=1, steps=9)[:, 0]
+    policy.reset(3)
+    obs_seq = [_obs(policy, 3, t) for t in range(9)]
+    for t in range(9):
+        obs_seq[t] = {k: v.copy() for k, v in obs_seq[t].items()}
+        for k in obs_seq[t]:
+            obs_seq[t][k][0] = _obs(policy, 1, t)[k][0]
+    batched = np.stack([policy.act(o) for o in obs_seq])[:, 0]
+    np.testing.assert_allclose(batched, alone, atol=1e-5)
+
+
+def test_checkpoint_round_trip_identical_actions(tmp_path):
+    policy = random_policy(SMALL, seed=3)
+    policy.meta = {"train_step": 5}
+    policy.save(tmp_path / "ckpt")
+    loaded = DiffusionPolicy.load(tmp_path / "ckpt")
+    assert loaded.cfg == SMALL and loaded.obs_dims == policy.obs_dims
+    assert loaded.meta["train_step"] == 5
+    np.testing.assert_array_equal(_rollout(loaded, 4, 10), _rollout(policy, 4, 10))
+    other_seed = DiffusionPolicy.load(tmp_path / "ckpt", seed=1)
+    assert not np.array_equal(_rollout(other_seed, 4, 1), _rollout(policy, 4, 1))
+
+
+def _corrupt_model(path):
+    (path / "model.safetensors").write_bytes(b"\x00garbage")
+
+
+def _truncate_model(path):
+    data = (path / "model.safetensors").read_bytes()
+    (path / "model.safetensors").write_bytes(data[: len(data) // 2])
+
+
+def _bad_config(path):
+    (path / "config.json").write_text("{not json")
+
+
+def _wrong_shape(path):
+    cfg = json.loads((path / "config.json").read_text())
+    cfg["down_dims"] = [16, 64]
+    (path / "config.json").write_text(json.dumps(cfg))
+
+
+def _missing_file(path):
+    (path / "normalizer.safetensors").unlink()
+
+
+def _bad_meta(path):
+    (path / "meta.json").write_text(json.dumps({"obs_dims": {}}))
+
+
+@pytest.mark.parametrize(
+    "damage", [_corrupt_model, _truncate_model, _bad_config, _wrong_shape, _missing_file, _bad_meta]
+)
+def test_corrupt_checkpoint_raises(tmp_path, damage):
+    random_policy(SMALL).save(tmp_path)
+    damage(tmp_path)
+    with pytest.raises(CheckpointError) as info:
+        DiffusionPolicy.load(tmp_path)
+    assert "\n" not in str(info.value)
+
+
+def test_missing_checkpoint_raises(tmp_path):
+    with pytest.raises(CheckpointError, match="missing model.safetensors"):
+        DiffusionPolicy.load(tmp_path / "nope")
+
+
+def test_measure_inference_reports_costs():
+    cost = measure_inference(random_policy(SMALL), batch_size=4, cycles=1)
+    assert cost.ms_per_replan > 0 and cost.ms_per_env_step > 0
+    assert cost.ms_per_env_step == pytest.approx(cost.ms_per_batched_step / 4)
