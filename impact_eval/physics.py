@@ -5,8 +5,8 @@
    (robot-on-environment sign: estimate = -applied) within 1 N / 0.1 Nm, sensor noise on,
    for both estimators.
 2. **Payload hold**: a 5 kg payload welded at the TCP appears at t = 0 while the arm holds a
-   fixed target for 3 s; report the final sag under plain impedance (expected m g / K) and
-   under IMPACT.
+   fixed target; report the sag at 3 s and 5 s under plain impedance (expected m g / K) and
+   under IMPACT, and when IMPACT's error settles within 3 mm.
 """
 
 from __future__ import annotations
@@ -102,10 +102,14 @@ def wrench_recovery(
     return rows
 
 
-def payload_hold(
-    mode: str, mass_kg: float = 5.0, hold_s: float = 3.0, seed: int = 0, estimator: str = "residual"
-) -> dict[str, float]:
-    """Sag [m] of the TCP below its fixed target after ``hold_s`` holding ``mass_kg``."""
+def payload_hold(mode: str, mass_kg: float = 5.0, hold_s: float = 5.0, seed: int = 0,
+                 estimator: str = "residual") -> dict[str, float]:
+    """TCP sag [m] below a fixed target while holding ``mass_kg`` that appears at t = 0.
+
+    Returns the sag at 3 s and at the end, the worst sag, the full position error (which also
+    holds the joint-friction dead-band), and ``settle_3mm_s``: the time after which the sag
+    stays within 3 mm (NaN if it never does).
+    """
     rig = Rig.build("payload_scene.xml", mode, estimator, seed)
     model = rig.sim.model
     body = model.body("payload").id
@@ -115,19 +119,21 @@ def payload_hold(
     rig.run(target_pos, target_quat, 1.0)
     model.body_mass[body] = mass_kg  # the payload appears (rigidly welded at the TCP)
     model.body_inertia[body] = inertia * mass_kg
-    sag = []
-    for _ in range(round(hold_s / rig.sim.dt)):
+    n = round(hold_s / rig.sim.dt)
+    sag, err = np.zeros(n), np.zeros(n)
+    for k in range(n):
         control_tick(rig.sim, rig.controller, rig.rng, target_pos, target_quat, -1.0)
-        sag.append(target_pos[2] - rig.sim.tcp_pose()[0][2])
-    sag_arr = np.array(sag)
-    return {
-        "mode": mode,
-        "mass_kg": mass_kg,
-        "final_sag_m": float(sag_arr[-1]),
-        "max_sag_m": float(sag_arr.max()),
-        "final_error_m": float(np.linalg.norm(target_pos - rig.sim.tcp_pose()[0])),
-        "expected_impedance_sag_m": mass_kg * 9.81 / 400.0,
-    }
+        pos = rig.sim.tcp_pose()[0]
+        sag[k] = target_pos[2] - pos[2]
+        err[k] = np.linalg.norm(target_pos - pos)
+    outside = np.flatnonzero(np.abs(sag) > 3e-3)
+    settle = 0.0 if outside.size == 0 else (outside[-1] + 1) * rig.sim.dt
+    k3 = round(3.0 / rig.sim.dt) - 1
+    return {"mode": mode, "mass_kg": mass_kg, "sag_3s_m": float(sag[k3]),
+            "error_3s_m": float(err[k3]), "final_sag_m": float(sag[-1]),
+            "final_error_m": float(err[-1]), "max_sag_m": float(sag.max()),
+            "settle_3mm_s": float(settle) if settle < hold_s else float("nan"),
+            "expected_impedance_sag_m": mass_kg * 9.81 / 400.0}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -144,15 +150,16 @@ def main(argv: list[str] | None = None) -> None:
                 f"| {est} | {r['pose']} | {r['force_applied_n']:.1f} | "
                 f"{r['force_err_n']:.3f} | {r['torque_err_nm']:.4f} |"
             )
-    print("\n## 5 kg payload held for 3 s at a fixed target (noise on)")
-    print("| controller | final sag [mm] | max sag [mm] | final error [mm] | m g / K [mm] |")
-    print("|---|---|---|---|---|")
+    print("\n## 5 kg payload appears at t = 0; arm holds a fixed target (noise on)")
+    print("| controller | sag at 3 s [mm] | error at 3 s [mm] | sag at 5 s [mm] | "
+          "error at 5 s [mm] | max sag [mm] | sag within 3 mm after [s] | m g / K [mm] |")
+    print("|---|---|---|---|---|---|---|---|")
     for mode in ("impedance", "impact"):
         r = payload_hold(mode, seed=args.seed)
-        print(
-            f"| {mode} | {1e3 * r['final_sag_m']:.1f} | {1e3 * r['max_sag_m']:.1f} | "
-            f"{1e3 * r['final_error_m']:.1f} | {1e3 * r['expected_impedance_sag_m']:.1f} |"
-        )
+        print(f"| {mode} | {1e3 * r['sag_3s_m']:.1f} | {1e3 * r['error_3s_m']:.1f} | "
+              f"{1e3 * r['final_sag_m']:.1f} | {1e3 * r['final_error_m']:.1f} | "
+              f"{1e3 * r['max_sag_m']:.1f} | "
+              f"{r['settle_3mm_s']:.2f} | {1e3 * r['expected_impedance_sag_m']:.1f} |")
 
 
 if __name__ == "__main__":
