@@ -3,6 +3,7 @@
 Usage::
 
     python -m impact_envs.policies.diffusion.bench [--checkpoint DIR] [--batch 32] [--threads 1]
+        [--train]
 
 ``measure_inference`` is the function to call next to the env step cost: it runs ``act`` on
 random observations for whole replanning cycles and reports the mean cost.
@@ -11,6 +12,7 @@ random observations for whole replanning cycles and reports the mean cost.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -90,6 +92,32 @@ def measure_inference(
     )
 
 
+def measure_train_step(cfg: DiffusionConfig | None = None, steps: int = 5) -> float:
+    """Median seconds of one AdamW step (forward, backward, optimizer, EMA) at
+    ``cfg.batch_size`` on random data, after one warm-up step."""
+    from impact_envs.policies.diffusion.ema import EMA
+    from impact_envs.policies.diffusion.model import diffusion_loss, make_train_scheduler
+
+    cfg = cfg or DiffusionConfig()
+    obs_dim = sum(DEFAULT_OBS_DIMS.get(k, 3) for k in cfg.obs_keys)
+    net = make_network(cfg, obs_dim)
+    ema, scheduler = EMA(net), make_train_scheduler(cfg)
+    optimizer = torch.optim.AdamW(net.parameters(), lr=cfg.lr, betas=cfg.betas)
+    generator = torch.Generator().manual_seed(0)
+    obs = torch.randn(cfg.batch_size, cfg.n_obs_steps, obs_dim, generator=generator)
+    actions = torch.randn(cfg.batch_size, cfg.horizon, 10, generator=generator).clamp(-1, 1)
+    times = []
+    for _ in range(steps + 1):
+        start = time.perf_counter()
+        loss = diffusion_loss(net, scheduler, obs, actions, generator)
+        optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        optimizer.step()
+        ema.update(net)
+        times.append(time.perf_counter() - start)
+    return float(np.median(times[1:]))
+
+
 def main(argv: list[str] | None = None) -> None:
     """Print the inference cost of a checkpoint (or an untrained default-size policy)."""
     parser = argparse.ArgumentParser(description="Diffusion Policy inference cost")
@@ -97,6 +125,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--batch", type=int, default=32, help="envs per act call")
     parser.add_argument("--cycles", type=int, default=3, help="timed replanning cycles")
     parser.add_argument("--threads", type=int, default=1, help="torch CPU threads")
+    parser.add_argument("--train", action="store_true", help="also time training steps")
     args = parser.parse_args(argv)
     torch.set_num_threads(args.threads)
     policy = DiffusionPolicy.load(args.checkpoint) if args.checkpoint else random_policy()
@@ -109,6 +138,10 @@ def main(argv: list[str] | None = None) -> None:
     print(f"  replan (one batched DDIM call): {cost.ms_per_replan:8.2f} ms")
     print(f"  per batched env step (÷Ta):     {cost.ms_per_batched_step:8.2f} ms")
     print(f"  per single env step (÷Ta÷B):    {cost.ms_per_env_step:8.3f} ms")
+    if args.train:
+        for batch in (64, 256):
+            seconds = measure_train_step(dataclasses.replace(cfg, batch_size=batch))
+            print(f"  train step at batch {batch}:        {seconds:8.3f} s")
 
 
 if __name__ == "__main__":

@@ -1,0 +1,90 @@
+"""Training data: demonstration store -> normalizer, train/held-out window samplers."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from diffusers import DDPMScheduler
+
+from impact_envs.errors import InvalidArgumentError
+from impact_envs.policies.diffusion.config import DiffusionConfig
+from impact_envs.policies.diffusion.dataset import (
+    ACTION_KEY,
+    WindowSampler,
+    load_replay,
+    window_indices,
+)
+from impact_envs.policies.diffusion.model import make_train_scheduler
+from impact_envs.policies.diffusion.normalizer import Normalizer
+
+
+@dataclass(frozen=True)
+class TrainData:
+    """Everything the training loop reads.
+
+    Attributes:
+        normalizer: Fitted on the training episodes.
+        train: Sampler over training windows.
+        val: Sampler over held-out windows, or None when no episode is held out.
+        obs_dims: ``{obs_key: d_key}`` of ``cfg.obs_keys``.
+        scheduler: DDPM scheduler for ``add_noise``.
+        info: Dataset description stored with the exported policies.
+    """
+
+    normalizer: Normalizer
+    train: WindowSampler
+    val: WindowSampler | None
+    obs_dims: dict[str, int]
+    scheduler: DDPMScheduler
+    info: dict[str, Any]
+
+
+def split_episodes(n_episodes: int, val_fraction: float, seed: int) -> tuple[list, list]:
+    """Deterministic random split into (train, held-out) episode ids.
+
+    At least one episode is held out when ``val_fraction > 0`` and there are two or more.
+    """
+    if n_episodes < 1:
+        raise InvalidArgumentError("the dataset holds no episodes")
+    n_val = int(round(val_fraction * n_episodes))
+    if val_fraction > 0 and n_episodes >= 2:
+        n_val = min(max(n_val, 1), n_episodes - 1)
+    order = np.random.default_rng(seed).permutation(n_episodes)
+    return sorted(order[n_val:].tolist()), sorted(order[:n_val].tolist())
+
+
+def load_train_data(cfg: DiffusionConfig, path: Path, val_fraction: float) -> TrainData:
+    """Load ``path``, split episodes, fit the normalizer on the training part."""
+    replay = load_replay(path)
+    obs = replay.obs_matrix(cfg.obs_keys)
+    actions = replay.data[ACTION_KEY]
+    train_eps, val_eps = split_episodes(replay.n_episodes, val_fraction, cfg.seed)
+    starts = np.concatenate([[0], replay.episode_ends[:-1]])
+    rows = np.concatenate([np.arange(starts[e], replay.episode_ends[e]) for e in train_eps])
+    normalizer = Normalizer.fit(obs[rows], actions[rows], cfg.range_eps)
+    obs_n = normalizer.obs.forward(torch.from_numpy(obs))
+    act_n = normalizer.action.forward(torch.from_numpy(np.asarray(actions, np.float32)))
+
+    def sampler(episodes: list) -> WindowSampler:
+        idx = window_indices(replay.episode_ends, episodes, cfg.n_obs_steps, cfg.horizon)
+        return WindowSampler(obs_n, act_n, *idx)
+
+    info = {
+        "path": str(path),
+        "n_episodes": replay.n_episodes,
+        "n_steps": int(obs.shape[0]),
+        "val_episodes": val_eps,
+        "attrs": replay.attrs,
+    }
+    return TrainData(
+        normalizer=normalizer,
+        train=sampler(train_eps),
+        val=sampler(val_eps) if val_eps else None,
+        obs_dims={k: int(replay.data[k].shape[1]) for k in cfg.obs_keys},
+        scheduler=make_train_scheduler(cfg),
+        info=info,
+    )
