@@ -1,0 +1,186 @@
+"""``impact-collect``: record successful scripted-expert demonstrations into a zarr store.
+
+Usage::
+
+    impact-collect --env IMPACT/Hammer-v0 --out data/hammer_vanilla.zarr --episodes 200 --mass 0.2
+    impact-collect --env IMPACT/Hammer-v0 --out data/hammer_aug.zarr --episodes 200 \\
+        --mass-range 0.1:8
+    impact-collect --env IMPACT/Dumbbell-v0 --out data/db_aug.zarr --episodes 200 \\
+        --mass-list 2.5,5 --resume
+
+Attempt ``k`` uses env seed ``SeedSequence([seed, k])`` and a parameter drawn from
+``SeedSequence([seed, k, 1])`` (``--mass-range``), ``values[k % len]`` (``--mass-list``) or the
+fixed ``--mass``. Attempts run ``--n-envs`` at a time in lockstep; the successful episodes of
+each batch are appended in attempt order, so ``--resume`` reproduces an uninterrupted run.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+from tqdm import tqdm
+
+import impact_envs
+from impact_envs.policies.diffusion.collect_config import CollectConfig, parse_param_spec
+from impact_envs.policies.diffusion.collect_run import AttemptSpec, Expert, run_attempts
+from impact_envs.policies.diffusion.dataset import EpisodeMeta, ReplayWriter
+
+
+def attempt_seed(base_seed: int, attempt: int) -> int:
+    """Env reset seed of attempt ``attempt``."""
+    return int(np.random.SeedSequence([base_seed, attempt]).generate_state(1)[0])
+
+
+def attempt_param(cfg: CollectConfig, attempt: int) -> float | None:
+    """Randomized parameter of attempt ``attempt`` (None: the env's default)."""
+    if cfg.param_range is not None:
+        rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, attempt, 1]))
+        return float(rng.uniform(*cfg.param_range))
+    if cfg.param_list is not None:
+        return float(cfg.param_list[attempt % len(cfg.param_list)])
+    return cfg.param
+
+
+def default_env_factory(cfg: CollectConfig) -> Callable[[], gym.Env]:
+    """Factory of ``gym.make(env_id, controller=..., [object_mass=...])``."""
+
+    def make() -> gym.Env:
+        kwargs: dict = {"controller": cfg.controller}
+        if cfg.param is not None:
+            kwargs["object_mass"] = cfg.param
+        return gym.make(cfg.env_id, **kwargs)
+
+    return make
+
+
+def default_expert_factory(cfg: CollectConfig) -> Callable[[], Expert]:
+    """Factory of the scripted expert of ``cfg.env_id``."""
+
+    def make() -> Expert:
+        from impact_envs.policies.scripted import make_expert
+
+        return make_expert(cfg.env_id, load_compensation=cfg.load_compensation)
+
+    return make
+
+
+def store_attrs(cfg: CollectConfig, param_name: str) -> dict:
+    """Store attributes that a resumed run must match."""
+    return {
+        "env_id": cfg.env_id,
+        "param_name": param_name,
+        "param_spec": cfg.param_spec(),
+        "controller": cfg.controller,
+        "expert": {"name": "scripted", "load_compensation": cfg.load_compensation},
+        "seed": cfg.seed,
+        "post_success_steps": cfg.post_success_steps,
+        "package_version": impact_envs.__version__,
+    }
+
+
+def collect(
+    cfg: CollectConfig,
+    *,
+    env_factory: Callable[[], gym.Env] | None = None,
+    expert_factory: Callable[[], Expert] | None = None,
+) -> int:
+    """Collect until ``cfg.episodes`` successful demos are stored; returns the number stored.
+
+    ``env_factory``/``expert_factory`` default to ``gym.make`` and ``make_expert``.
+    """
+    make_env = env_factory or default_env_factory(cfg)
+    envs = [make_env() for _ in range(cfg.n_envs)]
+    expert = (expert_factory or default_expert_factory(cfg))()
+    param_name = getattr(envs[0].unwrapped, "param_name", "object_mass")
+    space = envs[0].observation_space
+    obs_dims = {k: int(np.prod(s.shape)) for k, s in space.spaces.items()}
+    writer = ReplayWriter(cfg.out, obs_dims, store_attrs(cfg, param_name), append=cfg.resume)
+    attempts = writer.attempts()
+    attempt = max(int(writer.root.attrs.get("n_attempts", 0)), int(attempts.max(initial=-1)) + 1)
+    bar = tqdm(total=cfg.episodes, initial=writer.n_episodes, disable=not cfg.progress)
+    try:
+        while writer.n_episodes < cfg.episodes and attempt < cfg.attempt_limit:
+            ids = list(range(attempt, min(attempt + cfg.n_envs, cfg.attempt_limit)))
+            seeds = [attempt_seed(cfg.seed, k) for k in ids]
+            params = [attempt_param(cfg, k) for k in ids]
+            spec = AttemptSpec(seeds, params, param_name)
+            results = run_attempts(envs[: len(ids)], expert, spec, cfg.post_success_steps)
+            for k, seed, result in zip(ids, seeds, results, strict=True):
+                if writer.n_episodes >= cfg.episodes:
+                    break  # later attempts of this batch do not count (resume redoes them)
+                if result.success:
+                    meta = EpisodeMeta(result.param, seed, True, k)
+                    writer.append_episode(result.obs, result.actions, meta)
+                    bar.update(1)
+                attempt = k + 1
+            writer.set_attrs(n_attempts=attempt)
+            bar.set_postfix(attempts=attempt, success=f"{writer.n_episodes / attempt:.2f}")
+    finally:
+        bar.close()
+        for env in envs:
+            env.close()
+    return writer.n_episodes
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Command-line interface of ``impact-collect``."""
+    parser = argparse.ArgumentParser(prog="impact-collect", description=__doc__.splitlines()[0])
+    parser.add_argument("--env", required=True, help="env id, e.g. IMPACT/Hammer-v0")
+    parser.add_argument("--out", required=True, help="output store (*.zarr)")
+    parser.add_argument("--episodes", type=int, default=200, help="successful demos to keep")
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--mass", type=float, help="fixed parameter value (mass [kg])")
+    group.add_argument("--mass-range", help="uniform range LO:HI")
+    group.add_argument("--mass-list", help="comma-separated values, cycled over attempts")
+    parser.add_argument(
+        "--load-compensation", action="store_true", help="expert uses privileged load compensation"
+    )
+    parser.add_argument("--controller", default="impedance", help="impedance | impact")
+    parser.add_argument("--seed", type=int, default=0, help="base seed")
+    parser.add_argument(
+        "--post-success-steps",
+        type=int,
+        default=15,
+        help="steps recorded after the first success (0: stop at success)",
+    )
+    parser.add_argument("--n-envs", type=int, default=8, help="envs stepped in lockstep")
+    parser.add_argument("--max-attempts", type=int, help="default: 3 x episodes + n-envs")
+    parser.add_argument("--resume", action="store_true", help="append to an existing store")
+    parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point of ``impact-collect``."""
+    args = build_parser().parse_args(argv)
+    param, param_range, param_list = parse_param_spec(args.mass, args.mass_range, args.mass_list)
+    cfg = CollectConfig(
+        env_id=args.env,
+        out=str(Path(args.out)),
+        episodes=args.episodes,
+        param=param,
+        param_range=param_range,
+        param_list=param_list,
+        load_compensation=args.load_compensation,
+        controller=args.controller,
+        seed=args.seed,
+        post_success_steps=args.post_success_steps,
+        n_envs=args.n_envs,
+        max_attempts=args.max_attempts,
+        resume=args.resume,
+        progress=not args.no_progress,
+    )
+    stored = collect(cfg)
+    if stored < cfg.episodes:
+        raise SystemExit(
+            f"only {stored}/{cfg.episodes} successful demos after {cfg.attempt_limit} attempts"
+        )
+    print(f"{stored} demos in {cfg.out}")
+
+
+if __name__ == "__main__":
+    main()

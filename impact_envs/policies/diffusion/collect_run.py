@@ -1,0 +1,133 @@
+"""Run a batch of scripted-expert attempts in lockstep and record their trajectories."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import gymnasium as gym
+import numpy as np
+
+from impact_envs.policies.protocol import stack_obs
+
+
+class Expert(Protocol):
+    """The scripted-expert interface collection relies on."""
+
+    def reset(self, n_envs: int, object_mass_kg: np.ndarray) -> None:
+        """Start ``n_envs`` episodes; ``object_mass_kg`` ``(n_envs,)`` is privileged info."""
+        ...
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """Return ``(B, 10)`` actions for the batched observation."""
+        ...
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """One finished attempt.
+
+    Attributes:
+        obs: ``{key: (T, d_key)}`` observations before each action.
+        actions: ``(T, 10)`` expert actions.
+        success: ``info["is_success"]`` held at some step.
+        param: Parameter value the env reports (``info[param_name]``), else the requested
+            value, else NaN.
+    """
+
+    obs: dict[str, np.ndarray]
+    actions: np.ndarray
+    success: bool
+    param: float
+
+
+@dataclass(frozen=True)
+class AttemptSpec:
+    """Reset settings of a batch of attempts.
+
+    Attributes:
+        seeds: Env reset seed per attempt.
+        params: Parameter value per attempt, passed as reset option ``param_name`` (None: the
+            env's default).
+        param_name: Reset-option name of the randomized parameter (e.g. ``object_mass``).
+    """
+
+    seeds: list[int]
+    params: list[float | None]
+    param_name: str
+
+
+def _reset_all(
+    envs: list[gym.Env], attempts: AttemptSpec
+) -> tuple[list[dict], np.ndarray, np.ndarray]:
+    """Reset every env.
+
+    Returns:
+        Observations, object masses for the expert [kg] (NaN if unknown) and the parameter
+        values the envs report (``info[param_name]``, else the requested value, else NaN).
+    """
+    obs_list, masses, params = [], [], []
+    for env, seed, param in zip(envs, attempts.seeds, attempts.params, strict=True):
+        options = {} if param is None else {attempts.param_name: param}
+        obs, info = env.reset(seed=seed, options=options)
+        obs_list.append(obs)
+        requested = np.nan if param is None else param
+        params.append(float(info.get(attempts.param_name, requested)))
+        mass_default = params[-1] if attempts.param_name == "object_mass" else np.nan
+        masses.append(float(info.get("object_mass", mass_default)))
+    return obs_list, np.asarray(masses), np.asarray(params)
+
+
+def run_attempts(
+    envs: list[gym.Env],
+    expert: Expert,
+    attempts: AttemptSpec,
+    post_success_steps: int,
+) -> list[EpisodeResult]:
+    """Run one attempt per env in lockstep until every attempt has ended.
+
+    An attempt ends on termination, truncation, or ``post_success_steps`` steps after the
+    first step whose ``info["is_success"]`` is true (envs need not terminate on success).
+
+    Args:
+        envs: One env per attempt.
+        expert: Batched scripted expert (reset for ``len(envs)`` envs).
+        attempts: Seeds and parameter values of the attempts.
+        post_success_steps: Steps recorded after the first success [policy steps].
+
+    Returns:
+        One result per env, in the order of ``envs``.
+    """
+    obs_list, masses, params = _reset_all(envs, attempts)
+    expert.reset(len(envs), object_mass_kg=masses)
+    traj_obs: list[list[dict]] = [[] for _ in envs]
+    traj_act: list[list[np.ndarray]] = [[] for _ in envs]
+    success_step = [-1] * len(envs)
+    active = [True] * len(envs)
+    while any(active):
+        actions = np.asarray(expert.act(stack_obs(obs_list)), dtype=np.float32)
+        for i, env in enumerate(envs):
+            if not active[i]:
+                continue
+            traj_obs[i].append(obs_list[i])
+            traj_act[i].append(actions[i])
+            obs_list[i], _, terminated, truncated, info = env.step(actions[i])
+            step = len(traj_act[i])
+            if success_step[i] < 0 and info.get("is_success", False):
+                success_step[i] = step
+            ended = success_step[i] >= 0 and step - success_step[i] >= post_success_steps
+            active[i] = not (terminated or truncated or ended)
+    return [
+        _result(traj_obs[i], traj_act[i], success_step[i] >= 0, params[i]) for i in range(len(envs))
+    ]
+
+
+def _result(
+    obs: list[dict[str, np.ndarray]], actions: list[np.ndarray], success: bool, param: float
+) -> EpisodeResult:
+    return EpisodeResult(
+        obs={k: np.stack([np.ravel(o[k]) for o in obs]) for k in obs[0]},
+        actions=np.stack(actions),
+        success=success,
+        param=float(param),
+    )
