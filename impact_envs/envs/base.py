@@ -218,12 +218,14 @@ class ImpactEnv(gym.Env):
 
     def _info(self, success: bool, metrics: dict[str, float] | None) -> dict[str, Any]:
         s = self.controller.signals
+        pos_error = self._target_pos - self.sim.tcp_pose()[0]
         info: dict[str, Any] = {
             "is_success": bool(success),
             "success_once": bool(self._success_once),
             self.param_name: float(self._episode_params[self.param_name]),
             "object_mass": float(self._episode_params.get("object_mass", np.nan)),
-            "pose_error_m": float(np.linalg.norm(self._target_pos - self.sim.tcp_pose()[0])),
+            "pose_error_m": float(np.linalg.norm(pos_error)),
+            "pos_error_world": pos_error,
             "wrench_ext_world": s.wrench_ext_world.copy(),
             "wrench_slow_world": s.wrench_slow_world.copy(),
             "wrench_pred_world": s.wrench_pred_world.copy(),
