@@ -190,7 +190,6 @@ def _real_hammer_or_skip() -> None:
         pytest.skip(f"IMPACT/Hammer-v0 unavailable: {type(exc).__name__}: {exc}")
 
 
-@pytest.mark.slow
 def test_real_hammer_pipeline(tmp_path):
     _real_hammer_or_skip()
     cfg = CollectConfig(

@@ -69,6 +69,21 @@ def test_noise_per_env_is_independent_of_batch():
     np.testing.assert_allclose(batched, alone, atol=1e-5)
 
 
+def test_seed_envs_makes_noise_follow_the_episode():
+    policy = random_policy(SMALL)
+    obs = _obs(policy, 2, 0)
+    swapped = {k: v[::-1].copy() for k, v in obs.items()}
+    policy.reset(2)
+    policy.seed_envs([11, 22])
+    first = policy.act(obs)
+    policy.reset(2)
+    policy.seed_envs([22, 11])
+    second = policy.act(swapped)
+    np.testing.assert_allclose(second[::-1], first, atol=1e-5)
+    with pytest.raises(InvalidArgumentError):
+        policy.seed_envs([1])
+
+
 def test_checkpoint_round_trip_identical_actions(tmp_path):
     policy = random_policy(SMALL, seed=3)
     policy.meta = {"train_step": 5}

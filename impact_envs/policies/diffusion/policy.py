@@ -7,14 +7,15 @@ Timing per env (To = 2, Tp = 16, Ta = 8)::
     executed:         |a_t ... a_{t+7}|        Ta actions, one per ``act`` call
 
 All envs whose action queue is empty are replanned in one batched DDIM call. The initial noise
-of env i comes from its own generator seeded by ``(seed, i)`` at ``reset``, so a rollout is
-reproducible and does not depend on which other envs replan at the same step.
+of env i comes from its own generator, seeded by ``(seed, i)`` at ``reset`` or by
+``(seed, episode seed)`` with ``seed_envs``, so a rollout is reproducible and does not depend
+on which other envs replan at the same step (DDIM with eta = 0 draws no further noise).
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -37,9 +38,9 @@ META_FILE = "meta.json"
 CHECKPOINT_FORMAT = 1
 
 
-def env_generator(seed: int, index: int) -> torch.Generator:
-    """Generator of env ``index`` for policy seed ``seed``."""
-    state = np.random.SeedSequence([seed, index]).generate_state(1, dtype=np.uint64)[0]
+def env_generator(seed: int, *keys: int) -> torch.Generator:
+    """Generator for policy seed ``seed`` and an env key (slot index or episode seed)."""
+    state = np.random.SeedSequence([seed, *keys]).generate_state(1, dtype=np.uint64)[0]
     return torch.Generator().manual_seed(int(state))
 
 
@@ -90,6 +91,16 @@ class DiffusionPolicy:
         self._queue = np.zeros((n_envs, cfg.n_action_steps, ACTION_DIM), dtype=np.float32)
         self._queue_pos = np.full(n_envs, cfg.n_action_steps)
         self._generators = [env_generator(self.seed, i) for i in range(n_envs)]
+
+    def seed_envs(self, episode_seeds: Sequence[int]) -> None:
+        """Reseed env i's noise from ``(seed, episode_seeds[i])`` (call after ``reset``).
+
+        An episode's actions then depend on its own seed only, not on its slot in the batch
+        (impact-eval calls this with the paired episode seeds).
+        """
+        if len(episode_seeds) != self.n_envs:
+            raise InvalidArgumentError(f"got {len(episode_seeds)} seeds for {self.n_envs} envs")
+        self._generators = [env_generator(self.seed, 1 << 32, int(s)) for s in episode_seeds]
 
     def reset_envs(self, indices: np.ndarray | list[int]) -> None:
         """Start a new episode in envs ``indices`` only (their generators continue)."""
