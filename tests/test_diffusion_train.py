@@ -132,5 +132,6 @@ def test_cli(data_path, tmp_path, capsys):
     argv = ["--data", str(data_path), "--out", str(out), "--steps", "2", "--batch-size", "4"]
     train_module.main([*argv, "--config", str(cfg_path), "--no-progress", "--val-every", "1"])
     assert "trained 2 steps" in capsys.readouterr().out
-    assert DiffusionConfig.from_json(out / "config.json").batch_size == 4
+    saved = DiffusionConfig.from_json(out / "config.json")
+    assert saved.batch_size == 4 and saved.down_dims == CFG.down_dims
     assert len(_rows(out)) == 2

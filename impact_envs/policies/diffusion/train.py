@@ -170,8 +170,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--data", required=True, help="demonstration store (DATA.zarr)")
     parser.add_argument("--out", required=True, help="output folder of the run")
     parser.add_argument("--steps", type=int, required=True, help="total optimizer steps")
-    parser.add_argument("--batch-size", type=int, default=DiffusionConfig.batch_size)
-    parser.add_argument("--seed", type=int, default=DiffusionConfig.seed)
+    parser.add_argument("--batch-size", type=int, help="default: config's (256)")
+    parser.add_argument("--seed", type=int, help="default: config's (0)")
     parser.add_argument("--resume", action="store_true", help="continue OUT/train_state")
     parser.add_argument("--config", help="DiffusionConfig JSON (overrides the defaults)")
     parser.add_argument("--checkpoint-every", type=int, default=1000, help="steps")
@@ -188,7 +188,8 @@ def main(argv: list[str] | None = None) -> None:
     if args.threads:
         torch.set_num_threads(args.threads)
     base = DiffusionConfig.from_json(args.config) if args.config else DiffusionConfig()
-    cfg = dataclasses.replace(base, batch_size=args.batch_size, seed=args.seed)
+    overrides = {"batch_size": args.batch_size, "seed": args.seed}
+    cfg = dataclasses.replace(base, **{k: v for k, v in overrides.items() if v is not None})
     opts = RunOptions(
         steps=args.steps,
         checkpoint_every=args.checkpoint_every,
