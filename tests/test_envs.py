@@ -129,3 +129,23 @@ def test_registered_episode_length_matches_task(env_id):
     env = gym.make(env_id)
     assert env.spec.max_episode_steps == env.unwrapped.task.max_episode_steps
     env.close()
+
+
+def test_expert_load_compensation_raises_targets_by_mg_over_k():
+    expert = make_expert("IMPACT/Hammer-v0", load_compensation=True)
+    with pytest.raises(InvalidArgumentError, match="object_mass_kg"):
+        expert.reset(1)
+    env = gym.make("IMPACT/Hammer-v0", object_mass=4.0)
+    obs, _ = env.reset(seed=0)
+    expert.reset(1, object_mass_kg=np.array([4.0]))
+    plain = make_expert("IMPACT/Hammer-v0")
+    plain.reset(1)
+    for _ in range(200):  # until both are carrying
+        a = expert.act(stack_obs([obs]))[0]
+        b = plain.act(stack_obs([obs]))[0]
+        obs, *_ = env.step(b)
+        if expert.phase[0] == plain.phase[0] == 3:  # LIFT: holding the object
+            assert a[2] - b[2] == pytest.approx(4.0 * 9.81 / 400.0)
+            break
+    else:
+        pytest.fail("expert never reached the lift phase")

@@ -79,7 +79,7 @@ class PickPlaceExpert:
     def __init__(self, spec: PickPlaceSpec, load_compensation: bool = False) -> None:
         self.spec = spec
         self.load_compensation = bool(load_compensation)
-        self.reset(1)
+        self.reset(1, np.zeros(1))
 
     def reset(self, n_envs: int, object_mass_kg: np.ndarray | None = None) -> None:
         """Start ``n_envs`` new episodes; masses are needed only with load compensation."""

@@ -15,6 +15,9 @@ HANDLE_HALF_HEIGHT_M = 0.0125
 BASKET_INNER_HALF_M = (0.19, 0.09)
 """Inner half extents of the basket floor (x, y) [m]."""
 BASKET_WALL_TOP_M = 0.06
+PAD_CLEARANCE_M = 0.004
+"""Grasp slightly above the handle centre so the finger pads (half height 14 mm around the
+TCP) clear the table instead of pressing into it."""
 
 
 class HammerTask(Task):
@@ -80,7 +83,7 @@ class HammerTask(Task):
     def make_expert(self, load_compensation: bool = False) -> PickPlaceExpert:
         spec = PickPlaceSpec(
             grasp_offset_obj=(0.0, 0.0, 0.0),
-            grasp_z=HANDLE_HALF_HEIGHT_M,
+            grasp_z=HANDLE_HALF_HEIGHT_M + PAD_CLEARANCE_M,
             hover_z=0.12,
             carry_z=0.18,
             place_z=0.045,
