@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +16,7 @@ from impact_envs.control.internal_model import (
     FEATURE_SCALE,
     InternalModel,
 )
+from impact_envs.control.internal_model_net import sgd_step
 from impact_envs.control.surprise_gate import SurpriseGate
 from impact_envs.errors import CheckpointError, InvalidArgumentError
 
@@ -169,3 +171,25 @@ def test_load_rejects_mismatched_or_missing(tmp_path: Path) -> None:
 def test_config_validation(kwargs: dict) -> None:
     with pytest.raises(InvalidArgumentError):
         InternalModelConfig(**kwargs)
+
+
+def test_sgd_step_matches_autograd() -> None:
+    """The hand-written gradients give the autograd + torch.optim.SGD update."""
+    model = InternalModel(InternalModelConfig(hidden_sizes=(32, 16)))
+    gen = torch.Generator().manual_seed(4)
+    with torch.no_grad():
+        for p in model.net.parameters():
+            p.copy_(0.1 * torch.randn(p.shape, generator=gen))
+    reference = copy.deepcopy(model.net)
+    x = torch.randn(16, model.input_dim, generator=gen)
+    y = torch.randn(16, 6, generator=gen)
+    mask = (torch.rand(16, 6, generator=gen) > 0.3).float()
+    optimizer = torch.optim.SGD(reference.parameters(), lr=0.01)
+    expected_loss = ((reference(x) - y) * mask).square().mean()
+    optimizer.zero_grad()
+    expected_loss.backward()
+    optimizer.step()
+    loss = sgd_step(model.net, x, y, mask, 0.01)
+    assert loss == pytest.approx(float(expected_loss), rel=1e-6)
+    for p, p_ref in zip(model.net.parameters(), reference.parameters(), strict=True):
+        np.testing.assert_allclose(p.detach().numpy(), p_ref.detach().numpy(), atol=1e-7)

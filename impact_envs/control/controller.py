@@ -2,24 +2,26 @@
 
 Per tick (paper, Algorithm 1):
     tau = g + C dq + J^T (w_imp + w_ff + w_cmd) + N tau_posture, then rate limit and saturation
-with w_ff = w_pred in mode "impact" and 0 in mode "impedance" (everything else identical).
+with w_ff = w_pred in mode "impact" and 0 in mode "impedance". The baseline ("impedance") runs
+the estimator and slow filter (their signals exist) but skips the internal model entirely.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, fields
 from typing import Literal
 
 import numpy as np
+import torch
 
+from impact_envs.control import kernels
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.estimators import make_estimator
 from impact_envs.control.impedance import CartesianImpedance
 from impact_envs.control.internal_model import InternalModel
-from impact_envs.control.jacobian import RegularizedWrenchMap
+from impact_envs.control.lie import invalid_quaternion
 from impact_envs.control.limits import TorqueLimiter
-from impact_envs.control.protocols import ArmDynamics
+from impact_envs.control.protocols import ArmDynamics, dynamics_arrays
 from impact_envs.control.slow_filter import SlowWrenchFilter
 from impact_envs.errors import InvalidArgumentError, SimulationError, check_choice
 
@@ -46,7 +48,8 @@ class ControllerSignals:
         wrench_imp_world: Impedance wrench K e - D J dq (6,).
         wrench_ext_world: Raw estimate w_hat from the estimator (6,).
         wrench_slow_world: Slow wrench w_slow (6,).
-        wrench_pred_world: Internal model prediction w_pred (6,) (computed in both modes).
+        wrench_pred_world: Internal model prediction w_pred (6,) (0 in mode "impedance",
+            which skips the internal model).
         wrench_ff_world: Applied feedforward (w_pred in "impact", 0 in "impedance") (6,).
         wrench_cmd_world: Explicit commanded wrench applied this tick (6,).
         slow_wrench_rate: Dimensionless slow-wrench rate (see SlowWrenchFilter).
@@ -89,13 +92,29 @@ class ControllerSignals:
         return ControllerSignals(**values)
 
 
+def limit_torch_threads() -> None:
+    """Set torch's intra-op threads to 1 when it has more (process-wide).
+
+    The SGD steps of the internal model are tiny (batch 16); extra threads only add
+    synchronisation and compete with the simulation for cores.
+    """
+    if torch.get_num_threads() > 1:
+        torch.set_num_threads(1)
+
+
 class ImpactController:
     """Torque controller of the IMPACT paper for a 7-DoF arm.
+
+    ``compute`` updates the dynamics and then runs every stage in one numba call
+    (``kernels.controller_tick``); only the internal model's replay insert and SGD step run in
+    Python/torch, on the ticks the kernel schedules them. Creating a controller calls
+    ``limit_torch_threads`` (torch intra-op threads := 1 when higher, process-wide).
 
     Attributes:
         dynamics: Controller model, ``update``-d inside ``compute``.
         config: Controller configuration.
-        mode: ``"impact"`` (feedforward applied) or ``"impedance"`` (baseline, not applied).
+        mode: ``"impact"`` (feedforward applied) or ``"impedance"`` (baseline: the internal
+            model is skipped entirely, w_pred reported as 0).
         internal_model: The learned wrench predictor (``save``/``load`` via safetensors).
         signals: ``ControllerSignals`` of the last tick.
     """
@@ -108,6 +127,7 @@ class ImpactController:
     ) -> None:
         """Create all stages with preallocated buffers; call ``reset`` before ``compute``."""
         check_choice("controller mode", mode, MODES)
+        limit_torch_threads()
         self.dynamics = dynamics
         self.config = config or ControllerConfig()
         self.mode = mode
@@ -128,15 +148,24 @@ class ImpactController:
             wrench_ff_world=w_pred if mode == "impact" else _zeros(6),
             tau_cmd=self.limiter.output,
         )
-        self._shared_map = cfg.impedance.nullspace_pinv_damping == cfg.estimator.regularization
-        self._map_est = RegularizedWrenchMap(cfg.estimator.regularization)
-        self._map_null = (
-            self._map_est
-            if self._shared_map
-            else RegularizedWrenchMap(cfg.impedance.nullspace_pinv_damping)
-        )
-        self._w_extra = np.zeros(6)
+        self._init_buffers()
         self._is_reset = False
+
+    def _init_buffers(self) -> None:
+        """Controller buffer (``kernels.controller_views``) and the wrench-map solves."""
+        cfg = self.config
+        lam, lam_n = cfg.estimator.regularization, cfg.impedance.nullspace_pinv_damping
+        self.buffer = np.zeros(kernels.CONTROLLER_SIZE)
+        par, self.signals.wrench_cmd_world, _, self._scalars = kernels.controller_views(
+            self.buffer
+        )
+        run_model = self.mode == "impact"
+        par[:] = (lam * lam, lam_n * lam_n, float(lam_n == lam), self.estimator.kernel_kind,
+                  float(run_model), float(run_model))
+        self._grams = np.zeros((2, 6, 6))
+        self.wrench_maps = np.zeros((2, 6, 7))  # estimator's (J J^T + l^2 I)^-1 J, projector's
+        self._zeros6, self._zeros7 = np.zeros(6), np.zeros(7)
+        self._include_friction = cfg.estimator.include_joint_friction
 
     def reset(self, q0: np.ndarray, keep_internal_model: bool = False) -> None:
         """Start an episode at joint configuration ``q0`` [rad].
@@ -188,45 +217,49 @@ class ImpactController:
             Torque command (7,) [Nm] after torque-rate limiting and saturation (a new array).
 
         Raises:
+            InvalidArgumentError: If the target quaternion is zero or not finite.
             SimulationError: If the command is not finite.
         """
         if not self._is_reset:
             raise InvalidArgumentError("invalid call order; valid: reset(q0) before compute()")
-        q = np.asarray(q, dtype=float)
-        dq = np.asarray(dq, dtype=float)
-        dyn = self.dynamics
+        f64 = np.float64
+        q = np.asarray(q, dtype=f64)
+        dq = np.asarray(dq, dtype=f64)
+        dyn, model = self.dynamics, self.internal_model
         dyn.update(q, dq)
-        map_est = self._map_est.update(dyn.jacobian)
-        map_null = map_est if self._shared_map else self._map_null.update(dyn.jacobian)
-        w_ext = self.estimator.update(q, dq, tau_measured, dyn, wrench_map=map_est)
-        w_slow = self.slow_filter.update(w_ext)
-        model = self.internal_model
-        model.push(q, dq, gripper_width_m, dyn.pos_ee_world, w_ext)
-        model.step(w_slow, self.slow_filter.slow_rate, learn_mask)
-        sig = self.signals
-        w_extra = self._w_extra
-        if wrench_cmd_world is None:
-            sig.wrench_cmd_world.fill(0.0)
-        else:
-            sig.wrench_cmd_world[:] = wrench_cmd_world
-        np.add(sig.wrench_ff_world, sig.wrench_cmd_world, out=w_extra)
-        imp = self.impedance
-        tau_no_grav = imp.compute(
-            dyn, q, dq, pos_target_world, quat_target_world, map_null, w_extra
-        )
-        tau = self.limiter.apply(tau_no_grav, imp.tau_gravity)
-        if not math.isfinite(float(tau.sum())):
-            raise SimulationError(f"non-finite torque command {tau!r}")
+        cmd = self._zeros6 if wrench_cmd_world is None else np.asarray(wrench_cmd_world, f64)
+        mask = model.mask_array(learn_mask)
+        flags = kernels.controller_tick(
+            q, dq, np.asarray(tau_measured, f64), np.asarray(pos_target_world, f64),
+            np.asarray(quat_target_world, f64), cmd, mask, float(gripper_width_m),
+            self._friction(dq), dynamics_arrays(dyn), self.buffer, self._grams, self.wrench_maps,
+            self.estimator.buffer, self.slow_filter.buffer, *model.kernel_args(),
+            self.impedance.buffer, self.limiter.buffer,
+        )  # fmt: skip
+        if flags:
+            self._after_tick(flags, quat_target_world, mask)
         self._fill_signals()
-        return tau.copy()
+        return self.limiter.output.copy()
+
+    def _friction(self, dq: np.ndarray) -> np.ndarray:
+        """Modelled joint friction (7,) [Nm], zeros when the estimator does not include it."""
+        if not self._include_friction:
+            return self._zeros7
+        return np.asarray(self.dynamics.joint_friction(dq), dtype=np.float64)
+
+    def _after_tick(self, flags: int, quat_target_world: np.ndarray, mask: np.ndarray) -> None:
+        """Raise on bad input / non-finite torque; run the scheduled replay insert / SGD step."""
+        if flags & kernels.BAD_QUAT:
+            raise invalid_quaternion(quat_target_world)
+        if flags & (kernels.STORE | kernels.TRAIN):
+            self.internal_model.learn(flags, self.slow_filter.wrench_slow_world, mask)
+        if flags & kernels.NON_FINITE:
+            raise SimulationError(f"non-finite torque command {self.limiter.output!r}")
 
     def _fill_signals(self) -> None:
-        """Update the scalar signals (the arrays are aliases, already current)."""
-        sig, model = self.signals, self.internal_model
-        ex, ey, ez, rx, ry, rz = self.impedance.pose_error.tolist()
-        sig.pos_error_norm_m = math.sqrt(ex * ex + ey * ey + ez * ez)
-        sig.rot_error_norm_rad = math.sqrt(rx * rx + ry * ry + rz * rz)
-        sig.slow_wrench_rate = self.slow_filter.slow_rate
-        sig.surprise_n = model.surprise_n
-        sig.gate_open = model.gate.is_open
-        sig.learning_active = model.learning_active
+        """Copy the kernel's scalar outputs into ``signals`` (the arrays are aliases)."""
+        sig = self.signals
+        e_pos, e_rot, rate, surprise, gate, learning = self._scalars.tolist()
+        sig.pos_error_norm_m, sig.rot_error_norm_rad = e_pos, e_rot
+        sig.slow_wrench_rate, sig.surprise_n = rate, surprise
+        sig.gate_open, sig.learning_active = gate != 0.0, learning != 0.0

@@ -14,9 +14,13 @@ from typing import Protocol
 
 import numpy as np
 
+from impact_envs.control import kernels
 from impact_envs.control.config import EstimatorConfig
 from impact_envs.control.jacobian import regularized_wrench_map
-from impact_envs.control.protocols import ArmDynamics
+from impact_envs.control.protocols import ArmDynamics, dynamics_arrays
+
+RESIDUAL, MOMENTUM = 0, 1
+"""``kernel_kind`` of the two estimators (selects the kernel in ``kernels.controller_tick``)."""
 
 
 class WrenchEstimator(Protocol):
@@ -24,6 +28,8 @@ class WrenchEstimator(Protocol):
 
     wrench_world: np.ndarray
     tau_residual: np.ndarray
+    kernel_kind: int
+    buffer: np.ndarray
 
     def reset(self) -> None:
         """Forget all filter / observer state."""
@@ -41,21 +47,28 @@ class WrenchEstimator(Protocol):
         ...
 
 
-def _bias_torque(
-    dq: np.ndarray, dynamics: ArmDynamics, with_friction: bool, coriolis_transposed: bool
+def _run_kernel(
+    estimator: ResidualEstimator | MomentumObserver,
+    dq: np.ndarray,
+    tau_meas: np.ndarray,
+    dynamics: ArmDynamics,
+    wrench_map: np.ndarray | None,
 ) -> np.ndarray:
-    """Return h = C dq + g + tau_fric, or (``coriolis_transposed``) C^T dq - g - tau_fric [Nm]."""
-    if coriolis_transposed:
-        h = dq @ dynamics.coriolis_matrix  # C^T dq
-        h -= dynamics.gravity
-        if with_friction:
-            h -= dynamics.joint_friction(dq)
-        return h
-    h = dynamics.coriolis_matrix @ dq
-    h += dynamics.gravity
-    if with_friction:
-        h += dynamics.joint_friction(dq)
-    return h
+    """Shared body of both ``update`` methods: friction, wrench map, then the stage kernel."""
+    dq = np.asarray(dq, dtype=np.float64)
+    cfg = estimator.config
+    if cfg.include_joint_friction:
+        fric = np.asarray(dynamics.joint_friction(dq), dtype=np.float64)
+    else:
+        fric = np.zeros_like(dq)
+    if wrench_map is None:
+        wrench_map = regularized_wrench_map(dynamics.jacobian, cfg.regularization)
+    kernel = kernels.residual_update if estimator.kernel_kind == RESIDUAL else (
+        kernels.momentum_update
+    )
+    kernel(dq, np.asarray(tau_meas, dtype=np.float64), fric, dynamics_arrays(dynamics),
+           np.asarray(wrench_map, dtype=np.float64), estimator.buffer)
+    return estimator.wrench_world
 
 
 class ResidualEstimator:
@@ -67,7 +80,8 @@ class ResidualEstimator:
     tau_meas - C dq - g - tau_fric, goes through the *same* filter, so
     tau_res = LP(tau_meas - C dq - g - tau_fric) - M LP(ddq_fd) ~ LP(tau_meas - tau_model)
     (exact while M varies slowly compared with T). Both filter states start at 0 after
-    ``reset``, so the estimate rises from 0 with time constant T instead of spiking.
+    ``reset``, so the estimate rises from 0 with time constant T instead of spiking. The tick
+    is ``kernels.residual_update``; the arrays are views of ``buffer`` (``residual_views``).
 
     Attributes:
         ddq_hat: Filtered joint acceleration (7,) [rad/s^2].
@@ -75,31 +89,29 @@ class ResidualEstimator:
         wrench_world: Last estimate (6,) [N, Nm].
     """
 
+    kernel_kind = RESIDUAL
+
     def __init__(self, config: EstimatorConfig, dt_s: float, n_joints: int = 7) -> None:
         """Create the estimator for control period ``dt_s`` [s]."""
         self.config = config
         self.dt_s = dt_s
         self.alpha = 1.0 - math.exp(-dt_s / config.lowpass_time_constant_s)
         n = n_joints
+        self.buffer = np.zeros(kernels.residual_size(n))
         # Both filters run on one stacked vector [ddq (n); tau_meas - C dq - g - tau_fric (n)].
-        self._lp = np.zeros(2 * n)
-        self._raw = np.zeros(2 * n)
-        self._gain = np.concatenate([np.full(n, self.alpha / dt_s), np.full(n, self.alpha)])
+        (self._par, self._lp, _, gain, _, self.tau_residual, self.wrench_world) = (
+            kernels.residual_views(self.buffer)
+        )
+        self._par[0] = self.alpha
+        gain[:n], gain[n:] = self.alpha / dt_s, self.alpha
         self.ddq_hat = self._lp[:n]
-        self._tau_lp = self._lp[n:]
-        self._raw_dq, self._raw_tau = self._raw[:n], self._raw[n:]
-        self.tau_residual = np.zeros(n)
-        self.wrench_world = np.zeros(6)
-        self._dq_prev = np.zeros(n)
-        self._tmp = np.zeros(n)
-        self._started = False
 
     def reset(self) -> None:
         """Zero both filters and forget the previous velocity."""
         self._lp.fill(0.0)
         self.tau_residual.fill(0.0)
         self.wrench_world.fill(0.0)
-        self._started = False
+        self._par[1] = 0.0  # started
 
     def update(
         self,
@@ -118,28 +130,7 @@ class ResidualEstimator:
             dynamics: Model already updated at (q, dq).
             wrench_map: Optional precomputed (J J^T + lambda^2 I)^-1 J (6, 7).
         """
-        if self._started:
-            np.subtract(dq, self._dq_prev, out=self._raw_dq)  # dt * finite-difference ddq
-        else:
-            self._raw_dq.fill(0.0)
-            self._started = True
-        self._dq_prev[:] = dq
-        raw_tau, tmp = self._raw_tau, self._tmp
-        np.subtract(tau_meas, dynamics.gravity, out=raw_tau)
-        np.dot(dynamics.coriolis_matrix, dq, out=tmp)
-        raw_tau -= tmp
-        if self.config.include_joint_friction:
-            raw_tau -= dynamics.joint_friction(dq)
-        # lp <- (1 - a) lp + a raw  (the 1/dt of the finite difference is folded into the gain)
-        self._lp *= 1.0 - self.alpha
-        self._raw *= self._gain
-        self._lp += self._raw
-        np.dot(dynamics.mass_matrix, self.ddq_hat, out=tmp)
-        np.subtract(self._tau_lp, tmp, out=self.tau_residual)
-        if wrench_map is None:
-            wrench_map = regularized_wrench_map(dynamics.jacobian, self.config.regularization)
-        np.dot(wrench_map, self.tau_residual, out=self.wrench_world)
-        return self.wrench_world
+        return _run_kernel(self, dq, tau_meas, dynamics, wrench_map)
 
 
 class MomentumObserver:
@@ -148,7 +139,8 @@ class MomentumObserver:
     p = M dq; r_k = K_O (p_k - p_0 - S_k), S_k = S_{k-1} + dt (tau_meas + C^T dq - g - tau_fric
     + r_{k-1}). Then r -> tau_ext (on the robot) with per-tick dynamics
     r_k = r_{k-1} + K_O dt (tau_ext - r_{k-1}), i.e. a first-order low-pass with time constant
-    1 / K_O. No acceleration, no M^-1. tau_res = -r gives the libfranka sign.
+    1 / K_O. No acceleration, no M^-1. tau_res = -r gives the libfranka sign. The tick is
+    ``kernels.momentum_update``; the arrays are views of ``buffer`` (``momentum_views``).
 
     Attributes:
         r: Observer residual (estimate of tau_ext ON the robot) (7,) [Nm].
@@ -156,18 +148,18 @@ class MomentumObserver:
         wrench_world: Last estimate (6,) [N, Nm].
     """
 
+    kernel_kind = MOMENTUM
+
     def __init__(self, config: EstimatorConfig, dt_s: float, n_joints: int = 7) -> None:
         """Create the observer for control period ``dt_s`` [s]."""
         self.config = config
         self.dt_s = dt_s
         self.gain = config.momentum_gain_per_s
-        self.r = np.zeros(n_joints)
-        self.tau_residual = np.zeros(n_joints)
-        self.wrench_world = np.zeros(6)
-        self._p0 = np.zeros(n_joints)
-        self._sum = np.zeros(n_joints)
-        self._p = np.zeros(n_joints)
-        self._started = False
+        self.buffer = np.zeros(kernels.momentum_size(n_joints))
+        (self._par, self.r, _, self._sum, _, self.tau_residual, self.wrench_world) = (
+            kernels.momentum_views(self.buffer)
+        )
+        self._par[:2] = self.gain, dt_s
 
     def reset(self) -> None:
         """Forget p_0, the integral and the residual."""
@@ -175,7 +167,7 @@ class MomentumObserver:
         self._sum.fill(0.0)
         self.tau_residual.fill(0.0)
         self.wrench_world.fill(0.0)
-        self._started = False
+        self._par[2] = 0.0  # started
 
     def update(
         self,
@@ -186,24 +178,7 @@ class MomentumObserver:
         wrench_map: np.ndarray | None = None,
     ) -> np.ndarray:
         """Advance one tick and return the wrench estimate (6,) [N, Nm] (see ResidualEstimator)."""
-        np.dot(dynamics.mass_matrix, dq, out=self._p)
-        if not self._started:
-            self._p0[:] = self._p
-            self._started = True
-        else:
-            beta = _bias_torque(dq, dynamics, self.config.include_joint_friction, True)
-            beta += tau_meas
-            beta += self.r
-            beta *= self.dt_s
-            self._sum += beta
-            np.subtract(self._p, self._p0, out=self.r)
-            self.r -= self._sum
-            self.r *= self.gain
-        np.negative(self.r, out=self.tau_residual)
-        if wrench_map is None:
-            wrench_map = regularized_wrench_map(dynamics.jacobian, self.config.regularization)
-        np.dot(wrench_map, self.tau_residual, out=self.wrench_world)
-        return self.wrench_world
+        return _run_kernel(self, dq, tau_meas, dynamics, wrench_map)
 
 
 def make_estimator(config: EstimatorConfig, dt_s: float, n_joints: int = 7) -> WrenchEstimator:

@@ -16,13 +16,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from impact_envs.control import kernels
 from impact_envs.control.config import ImpedanceConfig
-from impact_envs.control.lie import orientation_error
-from impact_envs.control.protocols import ArmDynamics
+from impact_envs.control.lie import invalid_quaternion
+from impact_envs.control.protocols import ArmDynamics, dynamics_arrays
 
 
 class CartesianImpedance:
     """Preallocated impedance law; all outputs are attributes overwritten every ``compute``.
+
+    The law itself is ``kernels.impedance_law`` (also run by ``kernels.controller_tick``); the
+    array attributes are views of ``buffer`` (layout: ``kernels.impedance_views``).
 
     Attributes:
         pose_error: e = [p_d - p (3) [m]; Log(R_d R^T) (3) [rad]], world frame.
@@ -39,28 +43,23 @@ class CartesianImpedance:
     def __init__(self, config: ImpedanceConfig, n_joints: int = 7) -> None:
         """Create the law from ``config`` for an arm with ``n_joints`` joints."""
         self.config = config
-        self.stiffness = np.array(
-            config.stiffness_translational_n_per_m + config.stiffness_rotational_nm_per_rad
-        )
-        self.damping = np.array(
-            config.damping_translational_ns_per_m + config.damping_rotational_nms_per_rad
-        )
         self.k_null = config.nullspace_stiffness_nm_per_rad
         self.d_null = config.nullspace_damping
+        self.buffer = np.zeros(kernels.impedance_size(n_joints))
+        (par, self._k_q_null, self.pose_error, self.twist_world, self.wrench_imp_world,
+         self.tau_posture, self.wrench_null_world, self._w, self.tau_coriolis, self.tau_gravity,
+         self.tau_no_gravity) = kernels.impedance_views(self.buffer)  # fmt: skip
+        par[:] = (
+            config.stiffness_translational_n_per_m
+            + config.stiffness_rotational_nm_per_rad
+            + config.damping_translational_ns_per_m
+            + config.damping_rotational_nms_per_rad
+            + (self.k_null, self.d_null)
+            + (float(config.compensate_gravity), float(config.compensate_coriolis))
+        )
+        self.stiffness, self.damping = par[:6], par[6:12]
         self.q_null = np.zeros(n_joints)
-        self._k_q_null = np.zeros(n_joints)
-        self.pose_error = np.zeros(6)
-        self._e_pos, self._e_rot = self.pose_error[:3], self.pose_error[3:]
-        self.twist_world = np.zeros(6)
-        self.wrench_imp_world = np.zeros(6)
-        self.wrench_null_world = np.zeros(6)
-        self.tau_posture = np.zeros(n_joints)
-        self.tau_coriolis = np.zeros(n_joints)
-        self.tau_gravity = np.zeros(n_joints)
-        self.tau_no_gravity = np.zeros(n_joints)
-        self._w = np.zeros(6)
-        self._tmp6 = np.zeros(6)
-        self._tmp7 = np.zeros(n_joints)
+        self._zeros6 = np.zeros(6)
 
     def set_posture(self, q_null: np.ndarray) -> None:
         """Set the null-space posture target q_null [rad] (the controller does it at reset)."""
@@ -75,8 +74,11 @@ class CartesianImpedance:
         quat_target_world: np.ndarray,
     ) -> np.ndarray:
         """Fill and return ``pose_error`` = [p_d - p; Log(R_d R^T)] (6,) [m, rad]."""
-        np.subtract(pos_target_world, pos_ee_world, out=self._e_pos)
-        orientation_error(quat_target_world, rot_ee_world, out=self._e_rot)
+        quat = np.ascontiguousarray(quat_target_world, dtype=np.float64)
+        rot = np.ascontiguousarray(rot_ee_world, dtype=np.float64)
+        if not kernels.orientation_error(quat, rot, self.pose_error[3:]):
+            raise invalid_quaternion(quat_target_world)
+        np.subtract(pos_target_world, pos_ee_world, out=self.pose_error[:3])
         return self.pose_error
 
     def compute(
@@ -102,36 +104,20 @@ class CartesianImpedance:
 
         Returns:
             ``tau_no_gravity`` (7,) [Nm]; add ``tau_gravity`` for the full command.
+
+        Raises:
+            InvalidArgumentError: If the target quaternion is zero or not finite.
         """
-        jac = dynamics.jacobian
-        self.compute_pose_error(
-            dynamics.pos_ee_world, dynamics.rot_ee_world, pos_target_world, quat_target_world
-        )
-        np.dot(jac, dq, out=self.twist_world)
-        w_imp, tmp6 = self.wrench_imp_world, self._tmp6
-        np.multiply(self.stiffness, self.pose_error, out=w_imp)
-        np.multiply(self.damping, self.twist_world, out=tmp6)
-        w_imp -= tmp6
-        # Posture torque tau_0 = k_n q_null - k_n q - d_n dq and its task-space part.
-        tau0 = self.tau_posture
-        np.multiply(q, -self.k_null, out=tau0)
-        tau0 += self._k_q_null
-        np.multiply(dq, self.d_null, out=self._tmp7)
-        tau0 -= self._tmp7
-        np.dot(wrench_map, tau0, out=self.wrench_null_world)
-        w = self._w
-        np.subtract(w_imp, self.wrench_null_world, out=w)
-        if wrench_ff_world is not None:
-            w += wrench_ff_world
-        out = self.tau_no_gravity
-        np.dot(w, jac, out=out)
-        out += tau0
-        if self.config.compensate_coriolis:
-            np.dot(dynamics.coriolis_matrix, dq, out=self.tau_coriolis)
-            out += self.tau_coriolis
-        if self.config.compensate_gravity:
-            self.tau_gravity[:] = dynamics.gravity
-        return out
+        f64 = np.float64
+        w_ff = self._zeros6 if wrench_ff_world is None else np.asarray(wrench_ff_world, f64)
+        ok = kernels.impedance_law(
+            dynamics_arrays(dynamics), np.asarray(q, f64), np.asarray(dq, f64),
+            np.asarray(pos_target_world, f64), np.asarray(quat_target_world, f64),
+            np.asarray(wrench_map, f64), w_ff, self.buffer,
+        )  # fmt: skip
+        if not ok:
+            raise invalid_quaternion(quat_target_world)
+        return self.tau_no_gravity
 
     def tau_null(self, jacobian: np.ndarray) -> np.ndarray:
         """Projected posture torque N tau_0 = tau_0 - J^T w_null (7,) [Nm] of the last tick."""

@@ -5,14 +5,14 @@ with fixed constants, (z - FEATURE_OFFSET) / FEATURE_SCALE (no data-dependent no
 the model learns online), and appended to a history of L ticks. The input is the history
 flattened oldest-to-newest, row-major: x[t * 24 + i] = z_norm[t][i]. Output = network
 output * OUTPUT_SCALE (10 N, 1 Nm). The torch module is the trained source of truth; per-tick
-inference runs on a NumPy float32 copy of its weights that is refreshed after every SGD step,
-``load`` and ``reinitialize``.
+inference runs in numba (``kernels.mlp_forward``, float64 accumulation) on float32 NumPy views
+that share memory with the torch weights, so SGD steps, ``load`` and ``reinitialize`` are seen
+without copying.
 """
 
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import asdict
 from pathlib import Path
 
@@ -20,6 +20,7 @@ import numpy as np
 import torch
 from safetensors.torch import load_file, save_file
 
+from impact_envs.control import kernels
 from impact_envs.control.config import InternalModelConfig
 from impact_envs.control.internal_model_net import (
     FEATURE_DIM,
@@ -29,6 +30,7 @@ from impact_envs.control.internal_model_net import (
     FORMAT_VERSION,
     OUTPUT_SCALE,
     build_network,
+    sgd_step,
 )
 from impact_envs.control.replay import ReplayBuffer
 from impact_envs.control.surprise_gate import SurpriseGate
@@ -46,14 +48,20 @@ __all__ = [
 
 
 class InternalModel:
-    """Network + history + numpy fast path + surprise gate + replay + online SGD.
+    """Network + history + numba fast path + surprise gate + replay + online SGD.
+
+    Per-tick work (feature push, forward pass, surprise, gate, replay/SGD schedule) is
+    ``kernels.push_features`` / ``model_predict`` / ``model_gate_step`` on ``kernel_args()``
+    (layouts: ``kernels.model_views``, ``model32_views``); only the replay insert and the SGD
+    step (``learn``) run in Python.
 
     Attributes:
         wrench_pred_world: Last prediction (6,) [N, Nm] (robot-on-environment sign).
         surprise_n: |w_pred - w_slow| over unmasked force axes of the last tick [N].
         gate: The hysteresis gate (``gate.is_open``).
         learning_active: Whether the last tick was a learning tick (gate open and quasi-steady).
-        learning_enabled: Set False to freeze the weights (prediction and gate keep running).
+        learning_enabled: Set False to freeze the weights (prediction and surprise keep
+            running; the gate holds its state).
         n_updates: SGD steps taken since construction / ``reinitialize``.
     """
 
@@ -63,25 +71,12 @@ class InternalModel:
         cfg = self.config
         self.input_dim = cfg.history_length * FEATURE_DIM
         self.net = build_network(cfg)
-        self.optimizer = torch.optim.SGD(self.net.parameters(), lr=cfg.learning_rate)
-        self.gate = SurpriseGate(cfg.surprise_open_n, cfg.surprise_release_n, cfg.slow_rate_max)
         self.replay = ReplayBuffer(cfg.replay_capacity, self.input_dim, 6, seed=cfg.seed)
-        self.wrench_pred_world = np.zeros(6)
-        self.surprise_n = 0.0
-        self.learning_active = False
-        self.learning_enabled = True
         self.n_updates = 0
-        self._inv_feature_scale = (1.0 / FEATURE_SCALE).astype(np.float32)
+        self._init_kernel_buffers()
+        self.gate = SurpriseGate(cfg.surprise_open_n, cfg.surprise_release_n, cfg.slow_rate_max,
+                                 state=self._state[3:4])
         self._inv_output_scale = (1.0 / OUTPUT_SCALE).astype(np.float32)
-        L = cfg.history_length
-        # History stored twice (rows h and h + L) so the window oldest..newest is contiguous.
-        self._hist = np.zeros((2 * L, FEATURE_DIM), dtype=np.float32)
-        self._rows = list(self._hist)
-        self._windows = [self._hist[h + 1 : h + 1 + L].reshape(-1) for h in range(L)]
-        self._window = self._windows[0]
-        self._head = 0
-        self._filled = False
-        self._tick = 0
         self._target = np.zeros(6, dtype=np.float32)
         self._mask = np.ones(6, dtype=np.float32)
         self._ones = np.ones(6, dtype=np.float32)
@@ -90,40 +85,69 @@ class InternalModel:
         self._batch_m = np.zeros((cfg.batch_size, 6), dtype=np.float32)
         self.refresh_fast_path()
 
-    # ----------------------------------------------------------------- state management
-    def refresh_fast_path(self) -> None:
-        """Copy the torch weights into the NumPy fast path (call after editing ``net`` by hand).
+    def _init_kernel_buffers(self) -> None:
+        """Allocate the float32 (features, history) and float64 (parameters, state) buffers."""
+        cfg = self.config
+        L, F = cfg.history_length, FEATURE_DIM
+        self._buf32 = np.zeros(kernels.model32_size(L, F), dtype=np.float32)
+        offset, inv_scale, hist = kernels.model32_views(self._buf32, F)
+        offset[:] = FEATURE_OFFSET
+        inv_scale[:] = 1.0 / FEATURE_SCALE
+        # History stored twice (rows h and h + L) so the window oldest..newest is contiguous.
+        self._hist = hist.reshape(2 * L, F)
+        self._windows = [self._hist[h + 1 : h + 1 + L].reshape(-1) for h in range(L)]
+        self.buffer = np.zeros(kernels.model_size(max(cfg.hidden_sizes)))
+        par, self._state, out_scale, self.wrench_pred_world, _ = kernels.model_views(self.buffer)
+        par[:] = (cfg.surprise_open_n, cfg.surprise_release_n, cfg.slow_rate_max,
+                  cfg.replay_period, cfg.update_every, 1.0, L, F)
+        out_scale[:] = OUTPUT_SCALE
+        self._par = par
 
-        Layer 0 keeps (W, b); later layers store [W | b] and act on activations that carry a
-        trailing constant 1, which saves one add per layer; OUTPUT_SCALE is folded into the last.
+    # ----------------------------------------------------------------- state management
+    @property
+    def surprise_n(self) -> float:
+        """Force surprise of the last tick [N]."""
+        return float(self._state[4])
+
+    @property
+    def learning_active(self) -> bool:
+        """Whether the last tick was a learning tick."""
+        return bool(self._state[5])
+
+    @property
+    def learning_enabled(self) -> bool:
+        """False freezes the weights (prediction and surprise keep running, the gate stops)."""
+        return bool(self._par[5])
+
+    @learning_enabled.setter
+    def learning_enabled(self, value: bool) -> None:
+        self._par[5] = float(value)
+
+    def refresh_fast_path(self) -> None:
+        """Re-bind the fast path to the torch parameters (call after replacing ``net``).
+
+        The forward kernel reads NumPy views that share memory with the torch weights, so
+        in-place changes (SGD steps, ``load_state_dict``, editing under ``no_grad``) are seen
+        without copying; OUTPUT_SCALE is applied after the last layer.
         """
         linears = [m for m in self.net if isinstance(m, torch.nn.Linear)]
-        ws = [m.weight.detach().numpy() for m in linears]
-        bs = [m.bias.detach().numpy() for m in linears]
-        self._w0, self._b0 = ws[0].copy(), bs[0].copy()
-        pairs = zip(ws[1:], bs[1:], strict=True)
-        self._w_aug = [np.concatenate([w, b[:, None]], axis=1) for w, b in pairs]
-        self._w_aug[-1] *= OUTPUT_SCALE[:, None]
-        if not hasattr(self, "_acts"):
-            self._acts = [np.ones(w.shape[0] + 1, dtype=np.float32) for w in ws[:-1]]
-            self._act_views = [a[:-1] for a in self._acts]
-            self._pred32 = np.zeros(6, dtype=np.float32)
+        self._weights = tuple(m.weight.detach().numpy() for m in linears)
+        self._biases = tuple(m.bias.detach().numpy() for m in linears)
+
+    def kernel_args(self) -> tuple:
+        """(float32 buffer, weights, biases, float64 buffer) of the internal-model kernels."""
+        return self._buf32, self._weights, self._biases, self.buffer
 
     def reset_history(self) -> None:
         """Clear the history, gate and prediction; keep weights and replay samples."""
-        self._filled = False
-        self._head = 0
-        self._tick = 0
-        self.gate.reset()
+        self._hist.fill(0.0)
+        self._state.fill(0.0)  # head, filled, tick, gate, surprise, learning
         self.wrench_pred_world.fill(0.0)
-        self.surprise_n = 0.0
-        self.learning_active = False
 
     def reinitialize(self) -> None:
         """Restore the seeded initial weights, clear the replay buffer and the history."""
         fresh = build_network(self.config)
         self.net.load_state_dict(fresh.state_dict())
-        self.optimizer = torch.optim.SGD(self.net.parameters(), lr=self.config.learning_rate)
         self.replay.clear()
         self.n_updates = 0
         self.refresh_fast_path()
@@ -139,38 +163,23 @@ class InternalModel:
         wrench_ext_world: np.ndarray,
     ) -> None:
         """Append one tick of features (the first push after a reset fills the whole history)."""
-        L = self.config.history_length
-        h = self._head
-        row = self._rows[h]
-        np.concatenate((q, dq, (gripper_width_m,), pos_ee_world, wrench_ext_world), out=row)
-        row -= FEATURE_OFFSET
-        row *= self._inv_feature_scale
-        if not self._filled:
-            self._hist[:] = row
-            self._filled = True
-        else:
-            self._rows[h + L][:] = row
-        self._window = self._windows[h]
-        self._head = (h + 1) % L
+        f64 = np.float64
+        kernels.push_features(
+            np.asarray(q, f64), np.asarray(dq, f64), float(gripper_width_m),
+            np.asarray(pos_ee_world, f64), np.asarray(wrench_ext_world, f64),
+            self._buf32, self.buffer,
+        )  # fmt: skip
 
     def history_input(self) -> np.ndarray:
         """The current flattened normalized history (L * 24,) float32 (a view)."""
-        if not self._filled:
+        head, filled = self._state[:2].tolist()
+        if not filled:
             return np.zeros(self.input_dim, dtype=np.float32)
-        return self._window
+        return self._windows[(int(head) - 1) % self.config.history_length]
 
     def predict(self) -> np.ndarray:
-        """NumPy forward pass on the current history -> ``wrench_pred_world`` (6,) [N, Nm]."""
-        a0 = self._act_views[0]
-        np.dot(self._w0, self.history_input(), out=a0)
-        a0 += self._b0
-        np.tanh(a0, out=a0)
-        for i in range(1, len(self._acts)):
-            a = self._act_views[i]
-            np.dot(self._w_aug[i - 1], self._acts[i - 1], out=a)
-            np.tanh(a, out=a)
-        np.dot(self._w_aug[-1], self._acts[-1], out=self._pred32)
-        self.wrench_pred_world[:] = self._pred32
+        """Forward pass on the current history -> ``wrench_pred_world`` (6,) [N, Nm]."""
+        kernels.model_predict(*self.kernel_args())
         return self.wrench_pred_world
 
     def predict_torch(self, x: np.ndarray | None = None) -> np.ndarray:
@@ -198,29 +207,27 @@ class InternalModel:
             The prediction made *before* any update on this tick (6,) [N, Nm].
         """
         pred = self.predict()
-        if learn_mask is None:
-            mask = self._ones
-            px, py, pz = (pred[:3] - wrench_slow_world[:3]).tolist()
-        else:
-            mask = self._mask
-            mask[:] = learn_mask
-            px, py, pz = ((pred[:3] - wrench_slow_world[:3]) * mask[:3]).tolist()
-        self.surprise_n = math.sqrt(px * px + py * py + pz * pz)
-        learn = self.learning_enabled and self.gate.update(self.surprise_n, slow_rate)
-        self.learning_active = learn
-        if not self.learning_enabled:
-            return pred
-        tick = self._tick
-        self._tick += 1
-        store = tick % self.config.replay_period == 0 and slow_rate <= self.config.slow_rate_max
-        train = learn and self._tick % self.config.update_every == 0
-        if store or train:
-            np.multiply(wrench_slow_world, self._inv_output_scale, out=self._target)
-            if store:
-                self.replay.add(self.history_input(), self._target, mask)
-            if train:
-                self.train_step(self.history_input(), self._target, mask)
+        mask = self.mask_array(learn_mask)
+        w_slow = np.asarray(wrench_slow_world, dtype=np.float64)
+        flags = kernels.model_gate_step(w_slow, float(slow_rate), mask, self.buffer)
+        if flags:
+            self.learn(flags, w_slow, mask)
         return pred
+
+    def mask_array(self, learn_mask: np.ndarray | None) -> np.ndarray:
+        """float32 (6,) learning mask: ones for None, else a copy of ``learn_mask``."""
+        if learn_mask is None:
+            return self._ones
+        self._mask[:] = learn_mask
+        return self._mask
+
+    def learn(self, flags: int, wrench_slow_world: np.ndarray, mask: np.ndarray) -> None:
+        """Store a replay sample (``flags & STORE``) and/or take an SGD step (``& TRAIN``)."""
+        np.multiply(wrench_slow_world, self._inv_output_scale, out=self._target)
+        if flags & kernels.STORE:
+            self.replay.add(self.history_input(), self._target, mask)
+        if flags & kernels.TRAIN:
+            self.train_step(self.history_input(), self._target, mask)
 
     def train_step(self, x: np.ndarray, target: np.ndarray, mask: np.ndarray) -> float:
         """One SGD step on [current sample] + replayed samples; returns the loss.
@@ -238,15 +245,10 @@ class InternalModel:
             np.take(self.replay.inputs, idx, axis=0, out=bx[1:])
             np.take(self.replay.targets, idx, axis=0, out=by[1:])
             np.take(self.replay.masks, idx, axis=0, out=bm[1:])
-        pred = self.net(torch.from_numpy(bx))
-        err = (pred - torch.from_numpy(by)) * torch.from_numpy(bm)
-        loss = err.square().mean()
-        self.optimizer.zero_grad(set_to_none=False)
-        loss.backward()
-        self.optimizer.step()
-        self.n_updates += 1
-        self.refresh_fast_path()
-        return float(loss.detach())
+        loss = sgd_step(self.net, torch.from_numpy(bx), torch.from_numpy(by),
+                        torch.from_numpy(bm), self.config.learning_rate)
+        self.n_updates += 1  # the fast path shares the weights' memory: no refresh
+        return loss
 
     # ----------------------------------------------------------------- persistence
     def save(self, path: str | Path) -> Path:

@@ -1,4 +1,4 @@
-"""Feature layout, fixed normalisation constants and the network of the internal model."""
+"""Feature layout, fixed normalisation constants, network and SGD step of the internal model."""
 
 from __future__ import annotations
 
@@ -47,3 +47,36 @@ def build_network(config: InternalModelConfig) -> torch.nn.Sequential:
     layers.append(last)
     torch.random.set_rng_state(gen_state)
     return torch.nn.Sequential(*layers)
+
+
+def sgd_step(
+    net: torch.nn.Sequential,
+    x: torch.Tensor,
+    target: torch.Tensor,
+    mask: torch.Tensor,
+    learning_rate: float,
+) -> float:
+    """One plain-SGD step on mean(((net(x) - target) * mask)^2) of ``build_network``'s MLP.
+
+    The gradients are written out by hand (tanh MLP, masked MSE) instead of autograd +
+    ``torch.optim.SGD``: the same update to float32 round-off (``test_sgd_step_matches_autograd``)
+    at about a third of the cost for these batch-16 steps, which run every 5th tick while the
+    model learns. Weights are updated in place. Returns the loss before the step.
+    """
+    linears = [m for m in net if isinstance(m, torch.nn.Linear)]
+    with torch.no_grad():
+        acts = [x]
+        for k, layer in enumerate(linears):
+            h = torch.addmm(layer.bias, acts[-1], layer.weight.t())
+            acts.append(torch.tanh(h) if k < len(linears) - 1 else h)
+        err = (acts[-1] - target).mul_(mask)
+        loss = float(err.square().mean())
+        grad = err.mul_(mask).mul_(2.0 / err.numel())  # d loss / d output
+        for k in range(len(linears) - 1, -1, -1):
+            layer, a_in = linears[k], acts[k]
+            grad_w, grad_b = grad.t().mm(a_in), grad.sum(0)
+            if k > 0:  # through W_k and the tanh that produced a_in (1 - tanh^2)
+                grad = grad.mm(layer.weight).mul_(1.0 - a_in * a_in)
+            layer.weight.sub_(grad_w, alpha=learning_rate)
+            layer.bias.sub_(grad_b, alpha=learning_rate)
+    return loss

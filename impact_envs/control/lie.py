@@ -1,7 +1,9 @@
 """SO(3) helpers: quaternions (w, x, y, z), exp/log maps, rot6d and slerp.
 
-Per-tick functions (``quat_to_matrix``, ``so3_log``) work on Python scalars internally because
-for 3x3 and 4-vectors that is several times cheaper than chains of small NumPy calls.
+Small functions work on Python scalars internally because for 3x3 and 4-vectors that is several
+times cheaper than chains of small NumPy calls. Matrix -> quaternion (Shepperd), the quaternion
+log and ``orientation_error`` are the numba functions of ``control/kernels.py`` that the
+controller runs every tick (imported on first use, so importing this module stays light).
 """
 
 from __future__ import annotations
@@ -12,7 +14,10 @@ import numpy as np
 
 from impact_envs.errors import InvalidArgumentError
 
-_EPS_SMALL_ANGLE = 1e-8
+
+def invalid_quaternion(quat: object) -> InvalidArgumentError:
+    """The error raised for a zero or non-finite quaternion."""
+    return InvalidArgumentError(f"invalid quaternion {quat!r}; valid: finite, non-zero wxyz")
 
 
 def _quat_tuple(quat: np.ndarray) -> tuple[float, float, float, float]:
@@ -20,7 +25,7 @@ def _quat_tuple(quat: np.ndarray) -> tuple[float, float, float, float]:
     w, x, y, z = quat.tolist() if isinstance(quat, np.ndarray) else (float(v) for v in quat)
     n = math.sqrt(w * w + x * x + y * y + z * z)
     if not (n > 1e-12 and math.isfinite(n)):
-        raise InvalidArgumentError(f"invalid quaternion {quat!r}; valid: finite, non-zero wxyz")
+        raise invalid_quaternion(quat)
     return w / n, x / n, y / n, z / n
 
 
@@ -48,25 +53,10 @@ def quat_to_matrix(quat: np.ndarray, out: np.ndarray | None = None) -> np.ndarra
 
 
 def _matrix_to_quat_tuple(rot: np.ndarray) -> tuple[float, float, float, float]:
-    """Shepperd's method on scalars; returns (w, x, y, z) with w >= 0."""
-    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = rot.tolist()
-    trace = m00 + m11 + m22
-    if trace >= max(m00, m11, m22):
-        s = 2.0 * math.sqrt(max(1.0 + trace, 0.0))
-        w, x, y, z = 0.25 * s, (m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s
-    elif m00 >= m11 and m00 >= m22:
-        s = 2.0 * math.sqrt(max(1.0 + m00 - m11 - m22, 0.0))
-        w, x, y, z = (m21 - m12) / s, 0.25 * s, (m01 + m10) / s, (m02 + m20) / s
-    elif m11 >= m22:
-        s = 2.0 * math.sqrt(max(1.0 + m11 - m00 - m22, 0.0))
-        w, x, y, z = (m02 - m20) / s, (m01 + m10) / s, 0.25 * s, (m12 + m21) / s
-    else:
-        s = 2.0 * math.sqrt(max(1.0 + m22 - m00 - m11, 0.0))
-        w, x, y, z = (m10 - m01) / s, (m02 + m20) / s, (m12 + m21) / s, 0.25 * s
-    n = math.sqrt(w * w + x * x + y * y + z * z)
-    if w < 0.0:
-        n = -n
-    return w / n, x / n, y / n, z / n
+    """Shepperd's method (``kernels.matrix_to_quat``); returns (w, x, y, z) with w >= 0."""
+    from impact_envs.control import kernels
+
+    return kernels.matrix_to_quat(np.ascontiguousarray(rot, dtype=np.float64))
 
 
 def matrix_to_quat(rot: np.ndarray) -> np.ndarray:
@@ -94,14 +84,10 @@ def quat_conjugate(quat: np.ndarray) -> np.ndarray:
 
 
 def _quat_log_tuple(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:
-    """Rotation vector of a unit quaternion with w >= 0 (angle in [0, pi])."""
-    s = math.sqrt(x * x + y * y + z * z)
-    if s < _EPS_SMALL_ANGLE:
-        # theta / s = 2 atan2(s, w) / s ~ (2 / w) (1 - s^2 / (3 w^2)); here w ~ 1.
-        k = 2.0 / w * (1.0 - s * s / (3.0 * w * w))
-    else:
-        k = 2.0 * math.atan2(s, w) / s
-    return k * x, k * y, k * z
+    """Rotation vector of a unit quaternion with w >= 0 (angle in [0, pi], ``kernels.quat_log``)."""
+    from impact_envs.control import kernels
+
+    return kernels.quat_log(float(w), float(x), float(y), float(z))
 
 
 def quat_to_rotvec(quat: np.ndarray) -> np.ndarray:
@@ -151,6 +137,8 @@ def orientation_error(
 ) -> np.ndarray:
     """Log(R_d R^T) computed as the log of the quaternion q_d * conj(q(R)) (shortest arc).
 
+    The controller's per-tick pose error is the same function (``kernels.orientation_error``).
+
     Args:
         quat_target: Desired orientation q_d (w, x, y, z), normalized here.
         rot: Current orientation R (3, 3).
@@ -158,19 +146,19 @@ def orientation_error(
 
     Returns:
         Rotation vector (3,) [rad], world frame, angle in [0, pi].
+
+    Raises:
+        InvalidArgumentError: If ``quat_target`` is zero or not finite.
     """
-    dw, dx, dy, dz = _quat_tuple(quat_target)
-    w, x, y, z = _matrix_to_quat_tuple(rot)
-    # q_d * conj(q)
-    ew = dw * w + dx * x + dy * y + dz * z
-    ex = -dw * x + dx * w - dy * z + dz * y
-    ey = -dw * y + dx * z + dy * w - dz * x
-    ez = -dw * z - dx * y + dy * x + dz * w
-    if ew < 0.0:
-        ew, ex, ey, ez = -ew, -ex, -ey, -ez
+    from impact_envs.control import kernels
+
+    res = np.empty(3)
+    quat = np.ascontiguousarray(quat_target, dtype=np.float64)
+    if not kernels.orientation_error(quat, np.ascontiguousarray(rot, dtype=np.float64), res):
+        raise invalid_quaternion(quat_target)
     if out is None:
-        out = np.empty(3)
-    out[:] = _quat_log_tuple(ew, ex, ey, ez)
+        return res
+    out[:] = res
     return out
 
 
@@ -205,17 +193,22 @@ def matrix_from_rot6d(rot6d: np.ndarray) -> np.ndarray:
     return np.column_stack([b1, b2, np.cross(b1, b2)])
 
 
-def slerp(quat0: np.ndarray, quat1: np.ndarray, t: float) -> np.ndarray:
-    """Spherical linear interpolation along the shortest arc, t in [0, 1] -> unit quaternion."""
+def slerp(quat0: np.ndarray, quat1: np.ndarray, t: float | np.ndarray) -> np.ndarray:
+    """Spherical linear interpolation along the shortest arc, t in [0, 1] -> unit quaternion.
+
+    A scalar ``t`` gives (4,); an array of n values gives (n, 4), one row per value (the env
+    interpolates all control ticks of a policy step in one call).
+    """
     q0 = np.array(_quat_tuple(quat0))
     q1 = np.array(_quat_tuple(quat1))
     dot = float(q0 @ q1)
     if dot < 0.0:
         q1, dot = -q1, -dot
+    tt = np.asarray(t, dtype=float)[..., None]
     if dot > 1.0 - 1e-10:
-        q = q0 + t * (q1 - q0)
+        q = q0 + tt * (q1 - q0)
     else:
         theta = math.acos(min(dot, 1.0))
-        q = (math.sin((1.0 - t) * theta) * q0 + math.sin(t * theta) * q1) / math.sin(theta)
-    q /= np.linalg.norm(q)
-    return q if q[0] >= 0.0 else -q
+        q = (np.sin((1.0 - tt) * theta) * q0 + np.sin(tt * theta) * q1) / math.sin(theta)
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] >= 0.0, q, -q)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from impact_envs.control import kernels
 from impact_envs.control.config import LimitsConfig
 
 
@@ -19,31 +20,33 @@ def limit_rate(
         tau_desired: Requested torque (7,) [Nm].
         tau_last: Torque commanded on the previous tick (7,) [Nm].
         max_delta_nm: Largest change per tick [Nm] (rate limit [Nm/s] times dt [s]).
-        out: Optional output array (may alias ``tau_desired``).
+        out: Optional float64 output array (may alias ``tau_desired``).
 
     Returns:
         The rate-limited torque (7,) [Nm].
     """
+    tau_desired = np.asarray(tau_desired, dtype=np.float64)
     if out is None:
-        out = np.empty_like(tau_desired, dtype=float)
-    np.subtract(tau_desired, tau_last, out=out)
-    np.minimum(out, max_delta_nm, out=out)
-    np.maximum(out, -max_delta_nm, out=out)
-    out += tau_last
+        out = np.empty_like(tau_desired)
+    kernels.limit_rate(
+        tau_desired, np.asarray(tau_last, dtype=np.float64), float(max_delta_nm), out
+    )
     return out
 
 
 def saturate(tau: np.ndarray, tau_max: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """Clamp each joint torque to [-tau_max, tau_max] [Nm]."""
+    tau = np.asarray(tau, dtype=np.float64)
     if out is None:
-        out = np.empty_like(tau, dtype=float)
-    np.minimum(tau, tau_max, out=out)
-    np.maximum(out, -tau_max, out=out)
+        out = np.empty_like(tau)
+    kernels.saturate(tau, np.asarray(tau_max, dtype=np.float64), out)
     return out
 
 
 class TorqueLimiter:
-    """Stateful torque-rate limiter followed by saturation.
+    """Stateful torque-rate limiter followed by saturation (``kernels.torque_limiter``).
+
+    ``tau_max`` and ``output`` are views of ``buffer`` (layout: ``kernels.limiter_views``).
 
     Like libfranka, the rate limit is applied to the torque *without* gravity (libfranka's
     ``tau_J_d`` excludes gravity, which the robot adds itself); gravity is then added and the
@@ -58,10 +61,11 @@ class TorqueLimiter:
             config: Limits.
             dt_s: Control period [s]; the per-tick bound is ``torque_rate_max_nm_per_s * dt_s``.
         """
-        self.tau_max = np.asarray(config.torque_max_nm, dtype=float)
+        self.buffer = np.zeros(kernels.limiter_size(len(config.torque_max_nm)))
+        par, self.tau_max, self._last_no_gravity, self.output = kernels.limiter_views(self.buffer)
+        self.tau_max[:] = config.torque_max_nm
         self.max_delta_nm = config.torque_rate_max_nm_per_s * dt_s
-        self._last_no_gravity = np.zeros(len(config.torque_max_nm))
-        self.output = np.zeros(len(config.torque_max_nm))
+        par[0] = self.max_delta_nm
 
     def reset(self, tau_no_gravity: np.ndarray | None = None) -> None:
         """Set the previously commanded torque without gravity (default 0) [Nm]."""
@@ -80,9 +84,9 @@ class TorqueLimiter:
         Returns:
             The torque to apply (7,) [Nm]; an internal buffer, overwritten on the next call.
         """
-        out = self.output
-        limit_rate(tau_no_gravity, self._last_no_gravity, self.max_delta_nm, out=out)
-        out += tau_gravity
-        saturate(out, self.tau_max, out=out)
-        np.subtract(out, tau_gravity, out=self._last_no_gravity)
-        return out
+        kernels.torque_limiter(
+            np.asarray(tau_no_gravity, dtype=np.float64),
+            np.asarray(tau_gravity, dtype=np.float64),
+            self.buffer,
+        )
+        return self.output

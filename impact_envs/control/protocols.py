@@ -36,3 +36,21 @@ class ArmDynamics(Protocol):
     def joint_friction(self, dq: np.ndarray) -> np.ndarray:
         """Torque (7,) [Nm] the drives must supply to overcome joint friction (sign of dq)."""
         ...
+
+
+def dynamics_arrays(
+    dynamics: ArmDynamics,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The ``dyn`` tuple of the numba kernels: (J, M, C, g, p_ee, R_ee), float64 arrays.
+
+    C-contiguous arrays are expected (``PinocchioArm`` and ``ConstantArmDynamics`` provide
+    them); another layout or dtype works but compiles one more kernel specialization.
+    """
+    return (
+        dynamics.jacobian,
+        dynamics.mass_matrix,
+        dynamics.coriolis_matrix,
+        dynamics.gravity,
+        dynamics.pos_ee_world,
+        dynamics.rot_ee_world,
+    )

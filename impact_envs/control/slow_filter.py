@@ -15,11 +15,14 @@ import math
 
 import numpy as np
 
+from impact_envs.control import kernels
 from impact_envs.control.config import SlowWrenchConfig
 
 
 class SlowWrenchFilter:
-    """Per-axis clipped low-pass; also reports the slow-wrench rate.
+    """Per-axis clipped low-pass and slow-wrench rate (``kernels.slow_filter_update``).
+
+    The arrays are views of ``buffer`` (layout: ``kernels.slow_filter_views``).
 
     Attributes:
         wrench_slow_world: w_slow (6,) [N, Nm], world frame, robot-on-environment sign.
@@ -34,15 +37,20 @@ class SlowWrenchFilter:
         self.config = config
         self.dt_s = dt_s
         f, t = config.rate_force_per_s, config.rate_torque_per_s
-        self.eta_per_s = np.array([f, f, f, t, t, t])
-        self.gain = self.eta_per_s * dt_s
         cf, ct = config.clip_force_n, config.clip_torque_nm
-        self.clip = np.array([cf, cf, cf, ct, ct, ct])
-        self._inv_max_force_slew = 1.0 / config.max_force_slew_n_per_s
-        self.wrench_slow_world = np.zeros(6)
-        self.rate_world = np.zeros(6)
-        self.slow_rate = 0.0
-        self._delta = np.zeros(6)
+        self.buffer = np.zeros(kernels.SLOW_FILTER_SIZE)
+        views = kernels.slow_filter_views(self.buffer)
+        self._par = views[0]  # [1 / (eta_f c_f), slow_rate]
+        self.eta_per_s, self.gain, self.clip, self.wrench_slow_world, self.rate_world = views[1:]
+        self._par[0] = 1.0 / config.max_force_slew_n_per_s
+        self.eta_per_s[:] = (f, f, f, t, t, t)
+        self.gain[:] = self.eta_per_s * dt_s
+        self.clip[:] = (cf, cf, cf, ct, ct, ct)
+
+    @property
+    def slow_rate(self) -> float:
+        """Dimensionless slow-wrench rate of the last update (see the class docstring)."""
+        return float(self._par[1])
 
     def reset(self, wrench_slow_world: np.ndarray | None = None) -> None:
         """Set w_slow (default 0) and zero the rate."""
@@ -51,19 +59,12 @@ class SlowWrenchFilter:
         else:
             self.wrench_slow_world[:] = wrench_slow_world
         self.rate_world.fill(0.0)
-        self.slow_rate = 0.0
+        self._par[1] = 0.0
 
     def update(self, wrench_ext_world: np.ndarray) -> np.ndarray:
         """Advance one tick toward ``wrench_ext_world`` (6,) and return w_slow (6,)."""
-        d = self._delta
-        np.subtract(wrench_ext_world, self.wrench_slow_world, out=d)
-        np.minimum(d, self.clip, out=d)
-        np.maximum(d, -self.clip, out=d)
-        np.multiply(self.eta_per_s, d, out=self.rate_world)
-        d *= self.gain
-        self.wrench_slow_world += d
-        fx, fy, fz = self.rate_world[:3].tolist()
-        self.slow_rate = math.sqrt(fx * fx + fy * fy + fz * fz) * self._inv_max_force_slew
+        w_ext = np.asarray(wrench_ext_world, dtype=np.float64)
+        kernels.slow_filter_update(w_ext, self.buffer)
         return self.wrench_slow_world
 
 
