@@ -66,8 +66,8 @@ class PinocchioArm:
     Call :meth:`update` once per control tick, then read the cached attributes:
     ``pos_ee_world`` (3,) [m], ``rot_ee_world`` (3, 3), ``jacobian`` (6, 7) world-aligned at the
     TCP with rows (linear; angular), ``mass_matrix`` (7, 7) [kg m^2] incl. armature,
-    ``gravity`` (7,) [Nm], ``nonlinear`` (7,) = C q' + g [Nm], ``coriolis_matrix`` (7, 7)
-    [Nm s] (refreshed only while ``need_coriolis``).
+    ``gravity`` (7,) [Nm], ``coriolis_matrix`` (7, 7) [Nm s] (refreshed only while
+    ``need_coriolis``); ``nonlinear`` (7,) = C q' + g [Nm] is computed when read.
 
     Args:
         xml_path: robot MJCF; defaults to the shipped FR3 + Hand.
@@ -108,31 +108,45 @@ class PinocchioArm:
         self.mass_matrix = np.eye(7)
         self.gravity = np.zeros(7)
         self.coriolis_matrix = np.zeros((7, 7))
-        self.nonlinear = np.zeros(7)
         self.need_coriolis = True
+        self._q, self._dq = np.zeros(7), np.zeros(7)
+        self._nle_data = self.model.createData()
         self._triu = np.triu_indices(7, 1)
+        self._crba_symmetric = self._crba_returns_symmetric()
+
+    def _crba_returns_symmetric(self) -> bool:
+        """Whether this pinocchio's ``crba`` binding returns the full symmetric M (else upper)."""
+        q = 0.5 * (self.q_lower + self.q_upper) + 0.1
+        upper = pin.crba(self.model, self.model.createData(), q)
+        return bool(np.array_equal(upper, upper.T))
 
     def update(self, q: np.ndarray, dq: np.ndarray) -> None:
         """Recompute every cached quantity at joint positions ``q`` [rad], velocities ``dq``.
 
-        ``coriolis_matrix`` is refreshed only when ``need_coriolis`` is True (the momentum
-        observer needs it; the residual estimator uses ``nonlinear`` = C q' + g).
+        ``coriolis_matrix`` is refreshed only when ``need_coriolis`` is True (the controller
+        needs it every tick). The functions used return new arrays (jacobian, gravity,
+        Coriolis), which are kept as they are; ``mass_matrix`` is updated in place.
         """
         model, data = self.model, self.data
+        self._q[:] = q
+        self._dq[:] = dq
         pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacement(model, data, self._tcp)
-        placement = data.oMf[self._tcp]
+        placement = pin.updateFramePlacement(model, data, self._tcp)
         self.pos_ee_world = placement.translation.copy()
         self.rot_ee_world = placement.rotation.copy()
         self.jacobian = pin.getFrameJacobian(model, data, self._tcp, pin.LOCAL_WORLD_ALIGNED)
-        upper = pin.crba(model, data, q)
-        mass = self.mass_matrix
-        mass[:] = upper
-        mass[self._triu[1], self._triu[0]] = upper[self._triu]
-        self.gravity = pin.computeGeneralizedGravity(model, data, q).copy()
-        self.nonlinear = pin.nonLinearEffects(model, data, q, dq).copy()
+        self.mass_matrix[:] = pin.crba(model, data, q)
+        if not self._crba_symmetric:
+            mass = self.mass_matrix
+            mass[self._triu[1], self._triu[0]] = mass[self._triu]
+        self.gravity = pin.computeGeneralizedGravity(model, data, q)
         if self.need_coriolis:
-            self.coriolis_matrix = pin.computeCoriolisMatrix(model, data, q, dq).copy()
+            self.coriolis_matrix = pin.computeCoriolisMatrix(model, data, q, dq)
+
+    @property
+    def nonlinear(self) -> np.ndarray:
+        """C(q, dq) dq + g(q) [Nm] at the last ``update`` (RNEA on demand, a new array)."""
+        return pin.nonLinearEffects(self.model, self._nle_data, self._q, self._dq).copy()
 
     def joint_friction(self, dq: np.ndarray) -> np.ndarray:
         """Joint friction torque [Nm] that the torque sensor does NOT see, for the residual.
@@ -141,7 +155,7 @@ class PinocchioArm:
         joint damping and Coulomb friction (docs/sensing.md), so the friction a residual
         estimator must model is zero. ``self.damping`` keeps the MJCF viscous coefficients.
         """
-        return np.zeros_like(dq)
+        return np.zeros(len(dq))
 
     def forward_kinematics(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """TCP position [m] and rotation matrix in the world frame at ``q`` (no caching)."""

@@ -13,7 +13,9 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
+from numba import njit
 
+from impact_envs.control.kernels import saturate
 from impact_envs.errors import InvalidArgumentError, SimulationError
 from impact_envs.robot.dynamics import ARM_JOINTS, FINGER_JOINTS
 
@@ -28,6 +30,43 @@ def _as_slice(indices: list[int]) -> slice | np.ndarray:
     if np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
         return slice(int(idx[0]), int(idx[0]) + idx.size)
     return idx
+
+
+@njit(cache=True)
+def _link_torque(qfrc_actuator, qfrc_damper, friction, out) -> None:
+    """out = motor torque + joint damping + dof Coulomb friction (link-side joint torque)."""
+    for j in range(out.shape[0]):
+        out[j] = qfrc_actuator[j] + qfrc_damper[j] + friction[j]
+
+
+@njit(cache=True)
+def _sense(z, stds, qpos, qvel, qfrc_actuator, qfrc_damper, friction, bias, out) -> None:
+    """out = [q, dq, tau] readings: true values + stds * z (tau also + bias), z (3n,)."""
+    n = qpos.shape[0]
+    tau = out[2 * n:]
+    _link_torque(qfrc_actuator, qfrc_damper, friction, tau)
+    for j in range(n):
+        out[j] = qpos[j] + stds[0] * z[j]
+        out[n + j] = qvel[j] + stds[1] * z[n + j]
+        tau[j] = tau[j] + bias[j] + stds[2] * z[2 * n + j]
+
+
+@njit(cache=True)
+def _contact_sums(ncon, geom, efc_address, efc_force, geom_group):
+    """Normal force sums (robot-environment, object-environment) over valid contacts."""
+    robot_env = obj_env = 0.0
+    for i in range(ncon):
+        adr = efc_address[i]
+        if adr < 0:
+            continue
+        g1, g2 = geom_group[geom[i, 0]], geom_group[geom[i, 1]]
+        if (g1 == GROUP_ROBOT and g2 == GROUP_OTHER) or (g2 == GROUP_ROBOT and g1 == GROUP_OTHER):
+            robot_env += efc_force[adr]
+        elif (g1 == GROUP_OBJECT and g2 == GROUP_OTHER) or (
+            g2 == GROUP_OBJECT and g1 == GROUP_OTHER
+        ):
+            obj_env += efc_force[adr]
+    return robot_env, obj_env
 
 
 @dataclass(frozen=True)
@@ -96,7 +135,38 @@ class FrankaSim:
         self._fric_type = int(mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF)
         self.tau_applied = np.zeros(7)
         self._fric_buffer = np.zeros(self.model.nv)
+        self._fric_arm = np.zeros(7)
         self._fric_rows_are_arm: bool | None = None
+        self._finger_ids = tuple(int(i) for i in self.finger_qpos)
+        self._bound_data: mujoco.MjData | None = None
+
+    @property
+    def noise(self) -> SensorNoise:
+        """Sensor noise model (assignable)."""
+        return self._noise
+
+    @noise.setter
+    def noise(self, value: SensorNoise) -> None:
+        self._noise = value
+        self._noise_stds = np.array([value.q_std_rad, value.dq_std_rad_s, value.tau_std_nm])
+
+    def _arm_views(self) -> tuple[np.ndarray, ...]:
+        """(qpos, qvel, qfrc_actuator, qfrc_damper, ctrl) of the arm, as views when contiguous.
+
+        MuJoCo allocates these arrays once per MjData, so the views are made once (again if
+        ``data`` is replaced); index arrays fall back to copies (ctrl then goes through data).
+        """
+        d = self.data
+        if d is not self._bound_data:
+            self._views = (d.qpos[self.arm_qpos], d.qvel[self.arm_dof],
+                           d.qfrc_actuator[self.arm_dof], d.qfrc_damper[self.arm_dof])
+            act = _as_slice(list(self.arm_act))
+            self._ctrl_arm = d.ctrl[act] if isinstance(act, slice) else None
+            self._bound_data = d
+        if isinstance(self.arm_qpos, slice) and isinstance(self.arm_dof, slice):
+            return self._views
+        return (d.qpos[self.arm_qpos], d.qvel[self.arm_dof], d.qfrc_actuator[self.arm_dof],
+                d.qfrc_damper[self.arm_dof])
 
     def _classify_geoms(self, object_bodies: tuple[str, ...]) -> np.ndarray:
         m = self.model
@@ -138,44 +208,56 @@ class FrankaSim:
 
         The torque sensor sits on the link side of each joint's transmission: it reads the motor
         torque minus joint damping and Coulomb friction, so the rigid-body equation
-        ``M(q) q'' + C q' + g = tau_measured + tau_ext`` holds with the armature in M.
+        ``M(q) q'' + C q' + g = tau_measured + tau_ext`` holds with the armature in M. The three
+        arrays are views of one new (21,) array.
         """
-        d, n = self.data, self.noise
         z = rng.standard_normal(21)
-        q = d.qpos[self.arm_qpos] + n.q_std_rad * z[:7]
-        dq = d.qvel[self.arm_dof] + n.dq_std_rad_s * z[7:14]
-        tau = self.true_joint_torque()
-        tau += self._tau_bias
-        tau += n.tau_std_nm * z[14:]
-        return q, dq, tau
+        out = np.empty(21)
+        _sense(z, self._noise_stds, *self._arm_views(), self._friction_torque(), self._tau_bias,
+               out)
+        return out[:7], out[7:14], out[14:]
 
     def true_joint_torque(self) -> np.ndarray:
         """Noise-free link-side joint torque of the last step [Nm] (a new array).
 
-        Motor torque + joint damping + the dof Coulomb-friction constraint force. MuJoCo orders
-        constraint rows equality first, then dof friction (``nf`` rows, in dof order).
+        Motor torque + joint damping + the dof Coulomb-friction constraint force.
+        """
+        tau = np.empty(7)
+        qpos, qvel, qfrc_actuator, qfrc_damper = self._arm_views()
+        _link_torque(qfrc_actuator, qfrc_damper, self._friction_torque(), tau)
+        return tau
+
+    def _friction_torque(self) -> np.ndarray:
+        """Dof Coulomb-friction constraint force on the arm joints [Nm] (zeros if none).
+
+        MuJoCo orders constraint rows equality first, then dof friction (``nf`` rows, in dof
+        order); when the first seven rows are the arm's, they are returned as a view.
         """
         d = self.data
+        nf = d.nf
+        if not nf:
+            self._fric_arm.fill(0.0)
+            return self._fric_arm
+        start = d.ne
         dof = self.arm_dof
-        tau = d.qfrc_actuator[dof] + d.qfrc_damper[dof]
-        if d.nf:
-            start = d.ne
-            ids = d.efc_id[start:start + d.nf]
-            if self._fric_rows_are_arm is None:
-                self._fric_rows_are_arm = (
-                    isinstance(dof, slice) and ids.size >= 7
-                    and np.array_equal(ids[:7], np.arange(dof.start, dof.stop)))
-            if self._fric_rows_are_arm:
-                tau += d.efc_force[start:start + 7]
-            else:
-                fric = self._fric_buffer
-                fric[ids] = d.efc_force[start:start + d.nf]
-                tau += fric[dof]
-        return tau
+        if self._fric_rows_are_arm is None:
+            ids = d.efc_id[start:start + nf]
+            self._fric_rows_are_arm = (
+                isinstance(dof, slice) and ids.size >= 7
+                and np.array_equal(ids[:7], np.arange(dof.start, dof.stop)))
+        if self._fric_rows_are_arm:
+            return d.efc_force[start:start + 7]
+        fric = self._fric_buffer
+        fric.fill(0.0)
+        fric[d.efc_id[start:start + nf]] = d.efc_force[start:start + nf]
+        self._fric_arm[:] = fric[dof]
+        return self._fric_arm
 
     def gripper_width(self) -> float:
         """Distance between the finger pads [m] (encoder of the hand)."""
-        return float(self.data.qpos[self.finger_qpos].sum())
+        qpos = self.data.qpos
+        i, j = self._finger_ids
+        return float(qpos[i] + qpos[j])
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """True TCP position [m] and rotation matrix in the world frame."""
@@ -188,10 +270,14 @@ class FrankaSim:
 
         ``gripper_cmd`` in [-1, 1]: -1 fully open (0.08 m), +1 closed (force-limited squeeze).
         """
-        np.clip(tau, -self.torque_limits, self.torque_limits, out=self.tau_applied)
+        saturate(np.asarray(tau, dtype=np.float64), self.torque_limits, self.tau_applied)
         d = self.data
-        d.ctrl[self.arm_act] = self.tau_applied
-        d.ctrl[self.gripper_act] = 0.02 * (1.0 - float(np.clip(gripper_cmd, -1.0, 1.0)))
+        self._arm_views()
+        if self._ctrl_arm is not None:
+            self._ctrl_arm[:] = self.tau_applied
+        else:
+            d.ctrl[self.arm_act] = self.tau_applied
+        d.ctrl[self.gripper_act] = 0.02 * (1.0 - min(max(float(gripper_cmd), -1.0), 1.0))
 
     def step(self) -> None:
         """Advance the physics by one control tick (``dt``)."""
@@ -217,18 +303,8 @@ class FrankaSim:
         ncon = d.ncon
         if ncon == 0:
             return 0.0, 0.0
-        geoms = d.contact.geom[:ncon]
-        groups = self.geom_group[geoms]
-        normal = d.efc_force[d.contact.efc_address[:ncon]]
-        valid = d.contact.efc_address[:ncon] >= 0
-        g1, g2 = groups[:, 0], groups[:, 1]
-        robot_env = ((g1 == GROUP_ROBOT) & (g2 == GROUP_OTHER)) | (
-            (g2 == GROUP_ROBOT) & (g1 == GROUP_OTHER)
-        )
-        obj_env = ((g1 == GROUP_OBJECT) & (g2 == GROUP_OTHER)) | (
-            (g2 == GROUP_OBJECT) & (g1 == GROUP_OTHER)
-        )
-        return float(normal[robot_env & valid].sum()), float(normal[obj_env & valid].sum())
+        con = d.contact
+        return _contact_sums(ncon, con.geom, con.efc_address, d.efc_force, self.geom_group)
 
     def object_finger_contacts(self, object_body: str) -> int:
         """Number of finger-pad contacts touching ``object_body`` (privileged grasp check)."""
