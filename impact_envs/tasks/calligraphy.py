@@ -1,0 +1,207 @@
+"""Calligraphy task: write a character with a hand-held pen while pressing on the paper.
+
+Hybrid position–force objective (docs/envs.md): the policy commands the pen-tip pose; while
+the commanded tip is on the paper (and the real tip is near it) the task adds an explicit
+pressing force along −z (robot-on-environment sign) and freezes internal-model learning on the
+normal axis, so the model learns the tool weight in free air and the tangential drag while
+writing, but never the commanded pressing force (``calligraphy_force.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+
+from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
+from impact_envs.robot.ik import HOME_Q
+from impact_envs.robot.sim import FrankaSim
+from impact_envs.tasks.base import BodyMass, Task, TaskParam
+from impact_envs.tasks.calligraphy_force import NormalForceCommand
+from impact_envs.tasks.calligraphy_strokes import (
+    CHARACTERS,
+    Reference,
+    WritingMetrics,
+    build_reference,
+    distance_to_path,
+    place_strokes,
+)
+
+PEN_TIP_OFFSET_M = 0.10
+"""Pen tip along the TCP z axis [m] (0.10 m below the TCP when the hand points down)."""
+PAPER_TOP_M = 0.01
+"""Height of the writing surface (paper on a 1 cm felt pad) [m]."""
+FORCE_DESIRED_N = 15.0
+"""Commanded normal (pressing) force [N]; above the ±5 N that the simulated joint Coulomb
+friction (invisible to the link-side torque sensors) adds while the arm moves."""
+FORCE_BAND_N = (7.5, 22.5)
+"""A writing sample is "in band" when the tip's normal force lies in this range [N]."""
+IN_BAND_MIN_FRAC = 0.9
+STROKE_RMS_TOL_M = 0.005
+"""Tolerance on the RMS distance of the written trace from the intended strokes [m]."""
+CONTACT_MIN_N = 0.2
+"""Below this normal force the pen is off the paper [N]."""
+CONTACT_GAP_MAX_S = 0.05
+"""A contact gap longer than this during a stroke is a loss of contact [s]."""
+CMD_ON_SURFACE_M = 0.002
+"""The commanded tip counts as "on the paper" up to this height above it [m]."""
+TIP_NEAR_SURFACE_M = 0.03
+"""Guard: no force command unless the actual tip is within this height of the paper [m]."""
+SAMPLE_TICKS = 10
+"""Writing metrics are sampled every 10 control ticks (100 Hz)."""
+
+
+class CalligraphyTask(Task):
+    """Write one randomly chosen, placed and rotated character with a hand-held pen."""
+
+    name = "calligraphy"
+    scene_xml = "calligraphy_scene.xml"
+    object_bodies = ("pen",)
+    params = (TaskParam("tool_mass", 0.1, 0.02, 5.0, "kg"),
+              TaskParam("surface_friction", 0.3, 0.05, 1.5, ""))
+    max_episode_steps = 480
+    workspace_low = np.array([0.15, -0.45, 0.0])
+    workspace_high = np.array([0.70, 0.45, 0.60])
+
+    center_xy_low = np.array([0.38, -0.06])
+    center_xy_high = np.array([0.44, 0.06])
+    rot_max_rad = np.deg2rad(15.0)
+    scale_range = (0.9, 1.1)
+    char_names = tuple(CHARACTERS)
+
+    def bind(self, sim: FrankaSim) -> None:
+        m = sim.model
+        self.mass = BodyMass(m, "pen")
+        self.pen = m.body("pen").id
+        self.tip_site = m.site("pen_tip").id
+        self.tip_geom = m.geom("pen_tip").id
+        self.paper_geom = m.geom("paper_geom").id
+        joint = m.joint("pen_free").id
+        self.qpos_adr = int(m.jnt_qposadr[joint])
+        self.dof_adr = int(m.jnt_dofadr[joint])
+        self.tool_mass = self.params[0].default
+        self.press = NormalForceCommand(FORCE_DESIRED_N)
+        self.metrics = WritingMetrics(FORCE_BAND_N, CONTACT_MIN_N, CONTACT_GAP_MAX_S)
+        self.char_index, self._tick, self._stroke, self._force_n = 0, 0, -1, 0.0
+
+    def set_feedforward_source(self, source: Callable[[], np.ndarray]) -> None:
+        """Read access to the controller's applied feedforward ``w_ff`` (6,) [N, Nm] (the env
+        passes ``ControllerSignals.wrench_ff_world``) for the normal-feedforward hold."""
+        self.press.ff_source = source
+
+    def apply_params(self, sim: FrankaSim, values: dict[str, float]) -> None:
+        self.tool_mass = values["tool_mass"]
+        self.mass.set(sim.model, values["tool_mass"])
+        sim.model.geom_friction[self.paper_geom, 0] = values["surface_friction"]
+
+    # ------------------------------------------------------------------ episode
+    def initialize_episode(self, sim: FrankaSim, rng: np.random.Generator) -> np.ndarray:
+        self.char_index = int(rng.integers(len(self.char_names)))
+        center = rng.uniform(self.center_xy_low, self.center_xy_high)
+        rot = rng.uniform(-self.rot_max_rad, self.rot_max_rad)
+        scale = rng.uniform(*self.scale_range)
+        paths = place_strokes(CHARACTERS[self.char_names[self.char_index]], center, rot, scale)
+        self.reference: Reference = build_reference(paths, PAPER_TOP_M)
+        q0 = HOME_Q + rng.uniform(-0.03, 0.03, size=7)
+        self._place_pen_at_tcp(sim, q0)
+        self.press.reset()
+        self.metrics.reset()
+        self._tick, self._stroke, self._force_n = 0, -1, 0.0
+        return q0
+
+    def _place_pen_at_tcp(self, sim: FrankaSim, q0: np.ndarray) -> None:
+        """Put the pen's free joint where the weld holds it for the arm at ``q0``."""
+        m, d = sim.model, sim.data
+        d.qpos[sim.arm_qpos] = q0
+        mujoco.mj_kinematics(m, d)
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, d.site_xmat[sim.tcp_site])
+        d.qpos[self.qpos_adr:self.qpos_adr + 3] = d.site_xpos[sim.tcp_site]
+        d.qpos[self.qpos_adr + 3:self.qpos_adr + 7] = quat
+        d.qvel[self.dof_adr:self.dof_adr + 6] = 0.0
+
+    # ------------------------------------------------------------------ sensing
+    def tip_force_n(self, sim: FrankaSim) -> float:
+        """Normal contact force [N] on the pen tip (privileged, for metrics only)."""
+        d = sim.data
+        n = d.ncon
+        if n == 0:
+            return 0.0
+        geoms = d.contact.geom[:n]
+        adr = d.contact.efc_address[:n]
+        hit = ((geoms[:, 0] == self.tip_geom) | (geoms[:, 1] == self.tip_geom)) & (adr >= 0)
+        return float(d.efc_force[adr[hit]].sum()) if hit.any() else 0.0
+
+    def tip_pos(self, sim: FrankaSim) -> np.ndarray:
+        """Pen tip point [m, world] (true pose)."""
+        return sim.data.site_xpos[self.tip_site].copy()
+
+    # ------------------------------------------------------------------ hooks
+    def before_tick(self, sim: FrankaSim, time_s: float) -> None:
+        """Every tick: update the pressing command; at 100 Hz: sample the writing metrics."""
+        tip = sim.data.site_xpos[self.tip_site]
+        self.press.tick(tip[2] - PAPER_TOP_M, sim.dt)
+        self._tick += 1
+        if self._tick % SAMPLE_TICKS:
+            return
+        _, self._stroke = self.reference.at(time_s)
+        if self._stroke < 0:
+            self.metrics.end_stroke()
+            return
+        self._force_n = self.tip_force_n(sim)
+        dist = distance_to_path(tip[:2], self.reference.paths[self._stroke])
+        self.metrics.add(self._force_n, dist, SAMPLE_TICKS * sim.dt)
+
+    def control_inputs(self, sim: FrankaSim, action: np.ndarray
+                       ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Press (ramped, normal feedforward held) and freeze normal-axis learning.
+
+        On when the commanded tip (action pose + pen offset) is on the paper and the actual
+        tip is within ``TIP_NEAR_SURFACE_M`` of it; otherwise pure pose tracking.
+        """
+        a = np.asarray(action, dtype=float)
+        pos = np.clip(a[:3], self.workspace_low, self.workspace_high)
+        cmd_tip_z = (pos + matrix_from_rot6d(a[3:9])[:, 2] * PEN_TIP_OFFSET_M)[2]
+        tip_z = sim.data.site_xpos[self.tip_site, 2]
+        if (cmd_tip_z <= PAPER_TOP_M + CMD_ON_SURFACE_M
+                and tip_z <= PAPER_TOP_M + TIP_NEAR_SURFACE_M):
+            return self.press.engage()
+        self.press.release()
+        return None, None
+
+    # ------------------------------------------------------------- observation
+    def observation(self, sim: FrankaSim) -> dict[str, np.ndarray]:
+        goal, _ = self.reference.at(float(sim.data.time) + 1.0 / 30.0)
+        return {
+            "object_pos": self.tip_pos(sim),
+            "object_rot6d": rot6d_from_matrix(sim.data.xmat[self.pen].reshape(3, 3)),
+            "goal_pos": goal,
+        }
+
+    def is_success(self, sim: FrankaSim) -> bool:
+        if sim.data.time < self.reference.t_end_s or self.metrics.n == 0:
+            return False
+        m = self.metrics.summary()
+        return bool(m["stroke_rms_m"] <= STROKE_RMS_TOL_M and not m["contact_lost"]
+                    and m["in_band_frac"] >= IN_BAND_MIN_FRAC)
+
+    def info(self, sim: FrankaSim) -> dict[str, float | bool | str]:
+        force = self._force_n if self._stroke >= 0 else self.tip_force_n(sim)
+        return {
+            "object_mass": float(self.tool_mass),
+            "normal_force_n": float(force),
+            "in_band": self.metrics.in_band(force),
+            "pressing": self.press.engaged,
+            "writing": self._stroke >= 0,
+            "character": self.char_names[self.char_index],
+            "writing_done": bool(sim.data.time >= self.reference.t_end_s),
+            **self.metrics.summary(),
+        }
+
+    def make_expert(self, load_compensation: bool = False):
+        """The pen-following expert (``policies/scripted_calligraphy.py``)."""
+        from impact_envs.policies.scripted_calligraphy import CalligraphyExpert
+
+        return CalligraphyExpert(PEN_TIP_OFFSET_M, PAPER_TOP_M,
+                                 load_compensation=load_compensation)
