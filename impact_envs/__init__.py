@@ -9,12 +9,18 @@ from gymnasium.envs.registration import register, registry
 
 __version__ = "0.1.0"
 
-ENV_IDS = ("IMPACT/Hammer-v0", "IMPACT/Dumbbell-v0", "IMPACT/Calligraphy-v0")
+ENV_IDS = (
+    "IMPACT/Hammer-v0",
+    "IMPACT/Dumbbell-v0",
+    "IMPACT/Calligraphy-v0",
+    "IMPACT/Disturbance-v0",
+)
 
 _ENTRY_POINTS = {
     "IMPACT/Hammer-v0": ("impact_envs.envs.hammer:HammerEnv", 750),
     "IMPACT/Dumbbell-v0": ("impact_envs.envs.dumbbell:DumbbellEnv", 750),
     "IMPACT/Calligraphy-v0": ("impact_envs.envs.calligraphy:CalligraphyEnv", 480),
+    "IMPACT/Disturbance-v0": ("impact_envs.envs.disturbance:DisturbanceEnv", 540),
 }
 
 for _env_id, (_entry, _steps) in _ENTRY_POINTS.items():
