@@ -2,8 +2,9 @@
 
 Run ``OMP_NUM_THREADS=1 python -m impact_envs.control.bench``. The model is updated once at a
 fixed state and its ``update`` is then replaced by a no-op, so the timing covers only the
-controller core (impedance, estimator, slow filter, internal-model inference, limits). Learning
-ticks (one SGD step every ``update_every`` ticks while the gate is open) are timed separately.
+controller core (impedance, estimator, slow filter, internal-model inference, limits), in mode
+"impact" and in mode "impedance" (no internal model). Learning ticks (one SGD step every
+``update_every`` ticks while the gate is open) are timed separately.
 """
 
 from __future__ import annotations
@@ -44,27 +45,38 @@ def _time_us(fn, number: int, repeat: int) -> float:
     return min(runs) / number * 1e6
 
 
+def _compute_us(dyn: ArmDynamics, mode: str, kind: str, number: int, repeat: int) -> tuple:
+    """(compute() [us], controller) at a fixed state with ``dyn.update`` already a no-op."""
+    q, dq = Q_BENCH.copy(), np.full(7, 0.01)
+    pos, quat = dyn.pos_ee_world.copy() + 0.01, matrix_to_quat(dyn.rot_ee_world)
+    tau = dyn.gravity.copy()
+    ctrl = ImpactController(dyn, ControllerConfig(estimator=EstimatorConfig(kind=kind)), mode=mode)
+    ctrl.reset(q)
+    for _ in range(100):
+        ctrl.compute(q, dq, tau, pos, quat)
+    return _time_us(lambda: ctrl.compute(q, dq, tau, pos, quat), number, repeat), ctrl
+
+
 def run(kind: str, use_fake: bool, number: int, repeat: int) -> dict[str, float]:
-    """Return per-call timings [us] of the dynamics update and of ``compute`` without it."""
+    """Per-call timings [us]: dynamics update, ``compute`` without it (both modes), the fused
+    kernel alone, the internal model's forward pass and one SGD step."""
     dyn, name = _dynamics(use_fake)
     q, dq = Q_BENCH.copy(), np.full(7, 0.01)
     dyn.update(q, dq)
     t_update = _time_us(lambda: dyn.update(q, dq), number, repeat)
-    pos, quat, tau = dyn.pos_ee_world.copy() + 0.01, matrix_to_quat(dyn.rot_ee_world), dyn.gravity
-    cfg = ControllerConfig(estimator=EstimatorConfig(kind=kind))
-    ctrl = ImpactController(dyn, cfg, mode="impact")
-    ctrl.reset(q)
     dyn.update = lambda q_, dq_: None  # type: ignore[method-assign]
-    for _ in range(100):
-        ctrl.compute(q, dq, tau, pos, quat)
-    t_compute = _time_us(lambda: ctrl.compute(q, dq, tau, pos, quat), number, repeat)
+    t_impedance, _ = _compute_us(dyn, "impedance", kind, number, repeat)
+    t_compute, ctrl = _compute_us(dyn, "impact", kind, number, repeat)
     model = ctrl.internal_model
+    t_forward = _time_us(model.predict, number, repeat)
     x, target, mask = model.history_input().copy(), np.zeros(6, np.float32), np.ones(6, np.float32)
     t_sgd = _time_us(lambda: model.train_step(x, target, mask), max(number // 20, 10), repeat)
     return {
         "dynamics": name,
         "update_us": t_update,
         "compute_us": t_compute,
+        "compute_impedance_us": t_impedance,
+        "forward_us": t_forward,
         "sgd_step_us": t_sgd,
     }
 
@@ -81,7 +93,9 @@ def main(argv: list[str] | None = None) -> None:
     res = run(args.estimator, args.fake, args.number, args.repeat)
     print(
         f"{res['dynamics']} ({args.estimator}): dynamics.update {res['update_us']:.1f} us, "
-        f"compute() without update {res['compute_us']:.1f} us, "
+        f"compute() without update {res['compute_us']:.1f} us (impact), "
+        f"{res['compute_impedance_us']:.1f} us (impedance), "
+        f"of which internal-model forward {res['forward_us']:.1f} us; "
         f"one SGD step {res['sgd_step_us']:.0f} us (every update_every ticks while learning)"
     )
 

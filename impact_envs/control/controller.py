@@ -166,6 +166,10 @@ class ImpactController:
         self.wrench_maps = np.zeros((2, 6, 7))  # estimator's (J J^T + l^2 I)^-1 J, projector's
         self._zeros6, self._zeros7 = np.zeros(6), np.zeros(7)
         self._include_friction = cfg.estimator.include_joint_friction
+        # kernels.controller_tick arguments around the internal model's (fixed arrays)
+        self._stage_buffers = (self.buffer, self._grams, self.wrench_maps,
+                               self.estimator.buffer, self.slow_filter.buffer)
+        self._law_buffers = (self.impedance.buffer, self.limiter.buffer)
 
     def reset(self, q0: np.ndarray, keep_internal_model: bool = False) -> None:
         """Start an episode at joint configuration ``q0`` [rad].
@@ -229,23 +233,17 @@ class ImpactController:
         dyn.update(q, dq)
         cmd = self._zeros6 if wrench_cmd_world is None else np.asarray(wrench_cmd_world, f64)
         mask = model.mask_array(learn_mask)
+        fric = dyn.joint_friction(dq) if self._include_friction else self._zeros7
         flags = kernels.controller_tick(
             q, dq, np.asarray(tau_measured, f64), np.asarray(pos_target_world, f64),
             np.asarray(quat_target_world, f64), cmd, mask, float(gripper_width_m),
-            self._friction(dq), dynamics_arrays(dyn), self.buffer, self._grams, self.wrench_maps,
-            self.estimator.buffer, self.slow_filter.buffer, *model.kernel_args(),
-            self.impedance.buffer, self.limiter.buffer,
+            np.asarray(fric, f64), dynamics_arrays(dyn), *self._stage_buffers,
+            *model.kernel_args(), *self._law_buffers,
         )  # fmt: skip
         if flags:
             self._after_tick(flags, quat_target_world, mask)
         self._fill_signals()
         return self.limiter.output.copy()
-
-    def _friction(self, dq: np.ndarray) -> np.ndarray:
-        """Modelled joint friction (7,) [Nm], zeros when the estimator does not include it."""
-        if not self._include_friction:
-            return self._zeros7
-        return np.asarray(self.dynamics.joint_friction(dq), dtype=np.float64)
 
     def _after_tick(self, flags: int, quat_target_world: np.ndarray, mask: np.ndarray) -> None:
         """Raise on bad input / non-finite torque; run the scheduled replay insert / SGD step."""

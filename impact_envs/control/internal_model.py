@@ -5,7 +5,7 @@ with fixed constants, (z - FEATURE_OFFSET) / FEATURE_SCALE (no data-dependent no
 the model learns online), and appended to a history of L ticks. The input is the history
 flattened oldest-to-newest, row-major: x[t * 24 + i] = z_norm[t][i]. Output = network
 output * OUTPUT_SCALE (10 N, 1 Nm). The torch module is the trained source of truth; per-tick
-inference runs in numba (``kernels.mlp_forward``, float64 accumulation) on float32 NumPy views
+inference runs in numba (``kernels.mlp_forward``) on float32 NumPy views
 that share memory with the torch weights, so SGD steps, ``load`` and ``reinitialize`` are seen
 without copying.
 """

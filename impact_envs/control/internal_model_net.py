@@ -68,15 +68,16 @@ def sgd_step(
         acts = [x]
         for k, layer in enumerate(linears):
             h = torch.addmm(layer.bias, acts[-1], layer.weight.t())
-            acts.append(torch.tanh(h) if k < len(linears) - 1 else h)
+            acts.append(h.tanh_() if k < len(linears) - 1 else h)
         err = (acts[-1] - target).mul_(mask)
-        loss = float(err.square().mean())
-        grad = err.mul_(mask).mul_(2.0 / err.numel())  # d loss / d output
+        flat = err.view(-1)
+        loss = float(torch.dot(flat, flat)) / flat.numel()
+        grad = err.mul_(mask).mul_(2.0 / flat.numel())  # d loss / d output
         for k in range(len(linears) - 1, -1, -1):
             layer, a_in = linears[k], acts[k]
-            grad_w, grad_b = grad.t().mm(a_in), grad.sum(0)
-            if k > 0:  # through W_k and the tanh that produced a_in (1 - tanh^2)
-                grad = grad.mm(layer.weight).mul_(1.0 - a_in * a_in)
-            layer.weight.sub_(grad_w, alpha=learning_rate)
-            layer.bias.sub_(grad_b, alpha=learning_rate)
+            # through W_k (before its update) and the tanh that produced a_in
+            grad_in = torch.ops.aten.tanh_backward(grad.mm(layer.weight), a_in) if k else None
+            layer.bias.sub_(grad.sum(0), alpha=learning_rate)
+            layer.weight.addmm_(grad.t(), a_in, alpha=-learning_rate)
+            grad = grad_in
     return loss

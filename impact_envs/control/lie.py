@@ -179,18 +179,22 @@ def matrix_from_rot6d(rot6d: np.ndarray) -> np.ndarray:
     Raises:
         InvalidArgumentError: If the two 3-vectors are (nearly) zero or parallel.
     """
-    r = np.asarray(rot6d, dtype=float).reshape(6)
-    a1, a2 = r[:3], r[3:]
-    n1 = float(np.linalg.norm(a1))
+    x1, y1, z1, x2, y2, z2 = np.asarray(rot6d, dtype=float).reshape(6).tolist()
+    n1 = math.sqrt(x1 * x1 + y1 * y1 + z1 * z1)
     if not (n1 > 1e-9 and math.isfinite(n1)):
         raise InvalidArgumentError(f"invalid rot6d {rot6d!r}; valid: finite, non-zero columns")
-    b1 = a1 / n1
-    u2 = a2 - float(b1 @ a2) * b1
-    n2 = float(np.linalg.norm(u2))
+    x1, y1, z1 = x1 / n1, y1 / n1, z1 / n1
+    d = x1 * x2 + y1 * y2 + z1 * z2
+    x2, y2, z2 = x2 - d * x1, y2 - d * y1, z2 - d * z1
+    n2 = math.sqrt(x2 * x2 + y2 * y2 + z2 * z2)
     if not (n2 > 1e-9 and math.isfinite(n2)):
         raise InvalidArgumentError(f"invalid rot6d {rot6d!r}; valid: non-parallel columns")
-    b2 = u2 / n2
-    return np.column_stack([b1, b2, np.cross(b1, b2)])
+    x2, y2, z2 = x2 / n2, y2 / n2, z2 / n2
+    return np.array([
+        [x1, x2, y1 * z2 - z1 * y2],
+        [y1, y2, z1 * x2 - x1 * z2],
+        [z1, z2, x1 * y2 - y1 * x2],
+    ])
 
 
 def slerp(quat0: np.ndarray, quat1: np.ndarray, t: float | np.ndarray) -> np.ndarray:
