@@ -8,6 +8,7 @@ names that say so; the controller never sees it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -49,6 +50,49 @@ def _sense(z, stds, qpos, qvel, qfrc_actuator, qfrc_damper, friction, bias, out)
         out[j] = qpos[j] + stds[0] * z[j]
         out[n + j] = qvel[j] + stds[1] * z[n + j]
         tau[j] = tau[j] + bias[j] + stds[2] * z[2 * n + j]
+
+
+@njit(cache=True)
+def _actuate(tau, torque_limits, tau_applied, ctrl, arm_act, gripper_act, gripper_cmd) -> None:
+    """tau_applied = clip(tau, +-limits) -> ctrl[arm_act]; ctrl[gripper] from cmd in [-1, 1]."""
+    saturate(tau, torque_limits, tau_applied)
+    for j in range(arm_act.shape[0]):
+        ctrl[arm_act[j]] = tau_applied[j]
+    g = gripper_cmd
+    if g > 1.0:
+        g = 1.0
+    if g < -1.0:
+        g = -1.0
+    ctrl[gripper_act] = 0.02 * (1.0 - g)
+
+
+@njit(cache=True)
+def _state_status(qpos, qvel, max_speed) -> int:
+    """0 when finite and |qvel| <= max_speed everywhere, 1 if not finite, 2 if too fast."""
+    for v in qpos:
+        if not math.isfinite(v):
+            return 1
+    for v in qvel:
+        if not math.isfinite(v):
+            return 1
+    for v in qvel:
+        if abs(v) > max_speed:
+            return 2
+    return 0
+
+
+@njit(cache=True)
+def _count_body_contacts(ncon, geom, geom_bodyid, target, fingers) -> int:
+    """Contacts between body ``target`` and any body in ``fingers``."""
+    count = 0
+    for i in range(ncon):
+        b1, b2 = geom_bodyid[geom[i, 0]], geom_bodyid[geom[i, 1]]
+        if b1 == target or b2 == target:
+            for f in fingers:
+                if b1 == f or b2 == f:
+                    count += 1
+                    break
+    return count
 
 
 @njit(cache=True)
@@ -132,12 +176,21 @@ class FrankaSim:
         self.set_grasp_force(grasp_force_n)
         self.geom_group = self._classify_geoms(object_bodies)
         self._tau_bias = np.zeros(7)
-        self._fric_type = int(mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF)
         self.tau_applied = np.zeros(7)
-        self._fric_buffer = np.zeros(self.model.nv)
+        self._init_fast_paths()
+
+    def _init_fast_paths(self) -> None:
+        """Buffers and ids of the per-tick helpers (friction rows, fingers, bound views)."""
+        m = self.model
+        self._fric_type = int(mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF)
+        self._fric_buffer = np.zeros(m.nv)
         self._fric_arm = np.zeros(7)
         self._fric_rows_are_arm: bool | None = None
         self._finger_ids = tuple(int(i) for i in self.finger_qpos)
+        names = ("left_finger", "right_finger")
+        self._finger_bodies = np.array(
+            [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, n) for n in names], dtype=np.int64
+        )
         self._bound_data: mujoco.MjData | None = None
 
     @property
@@ -151,17 +204,15 @@ class FrankaSim:
         self._noise_stds = np.array([value.q_std_rad, value.dq_std_rad_s, value.tau_std_nm])
 
     def _arm_views(self) -> tuple[np.ndarray, ...]:
-        """(qpos, qvel, qfrc_actuator, qfrc_damper, ctrl) of the arm, as views when contiguous.
+        """(qpos, qvel, qfrc_actuator, qfrc_damper) of the arm, as views when contiguous.
 
         MuJoCo allocates these arrays once per MjData, so the views are made once (again if
-        ``data`` is replaced); index arrays fall back to copies (ctrl then goes through data).
+        ``data`` is replaced); index arrays fall back to copies.
         """
         d = self.data
         if d is not self._bound_data:
             self._views = (d.qpos[self.arm_qpos], d.qvel[self.arm_dof],
                            d.qfrc_actuator[self.arm_dof], d.qfrc_damper[self.arm_dof])
-            act = _as_slice(list(self.arm_act))
-            self._ctrl_arm = d.ctrl[act] if isinstance(act, slice) else None
             self._bound_data = d
         if isinstance(self.arm_qpos, slice) and isinstance(self.arm_dof, slice):
             return self._views
@@ -270,14 +321,8 @@ class FrankaSim:
 
         ``gripper_cmd`` in [-1, 1]: -1 fully open (0.08 m), +1 closed (force-limited squeeze).
         """
-        saturate(np.asarray(tau, dtype=np.float64), self.torque_limits, self.tau_applied)
-        d = self.data
-        self._arm_views()
-        if self._ctrl_arm is not None:
-            self._ctrl_arm[:] = self.tau_applied
-        else:
-            d.ctrl[self.arm_act] = self.tau_applied
-        d.ctrl[self.gripper_act] = 0.02 * (1.0 - min(max(float(gripper_cmd), -1.0), 1.0))
+        _actuate(np.asarray(tau, dtype=np.float64), self.torque_limits, self.tau_applied,
+                 self.data.ctrl, self.arm_act, self.gripper_act, float(gripper_cmd))
 
     def step(self) -> None:
         """Advance the physics by one control tick (``dt``)."""
@@ -286,9 +331,10 @@ class FrankaSim:
     def check_finite(self) -> None:
         """Raise SimulationError when the state diverged."""
         d = self.data
-        if not (np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all()):
+        status = _state_status(d.qpos, d.qvel, 100.0)
+        if status == 1:
             raise SimulationError(f"non-finite state at t={d.time:.3f} s")
-        if np.abs(d.qvel).max() > 100.0:
+        if status == 2:
             raise SimulationError(f"velocity blow-up at t={d.time:.3f} s")
 
     # ---------------------------------------------------------------- contacts
@@ -309,12 +355,9 @@ class FrankaSim:
     def object_finger_contacts(self, object_body: str) -> int:
         """Number of finger-pad contacts touching ``object_body`` (privileged grasp check)."""
         m, d = self.model, self.data
+        ncon = d.ncon
+        if ncon == 0:
+            return 0
         target = m.body(object_body).id
-        count = 0
-        for i in range(d.ncon):
-            b1 = m.geom_bodyid[d.contact.geom1[i]]
-            b2 = m.geom_bodyid[d.contact.geom2[i]]
-            names = {m.body(b1).name, m.body(b2).name}
-            if target in (b1, b2) and names & {"left_finger", "right_finger"}:
-                count += 1
-        return count
+        return int(_count_body_contacts(ncon, d.contact.geom, m.geom_bodyid, target,
+                                        self._finger_bodies))
