@@ -193,14 +193,15 @@ class ImpactEnv(gym.Env):
         positions = pos0 + alphas[:, None] * (pos1 - pos0)
         quats = slerp(quat0, quat1, alphas)
         taus, qvels = np.empty((n, 7)), np.empty((n, 7))
-        arm_dof = sim.arm_dof
+        arm_dof = sim.arm_dof  # a slice in every scene: then a view that MuJoCo updates
+        qvel_arm = data.qvel[arm_dof] if isinstance(arm_dof, slice) else None
         peak_robot = peak_obj = 0.0
         for i in range(1, n + 1):
             task.before_tick(sim, float(data.time))
             q, dq = control_tick(sim, ctrl, rng, positions[i - 1], quats[i - 1], gripper,
                                  wrench_cmd, learn_mask)
             taus[i - 1] = sim.tau_applied
-            qvels[i - 1] = data.qvel[arm_dof]
+            qvels[i - 1] = qvel_arm if qvel_arm is not None else data.qvel[arm_dof]
             if i % 4 == 0 or i == n:
                 f_robot, f_obj = sim.contact_forces()
                 peak_robot = max(peak_robot, f_robot)
