@@ -2,20 +2,26 @@
 
 One run measures, on the same scene and the same scripted-expert trajectory:
 
-1. the full env (1 kHz controller + sensing + physics) with ``controller="impedance"`` and
-   ``controller="impact"``;
+1. the full env (1 kHz controller + sensing + physics, 30 Hz expert policy) with
+   ``controller="impedance"`` and ``controller="impact"``;
 2. raw ``mj_step`` replaying the exact actuator commands recorded in the IMPACT run, from the
    same initial state (pure physics cost of that trajectory).
 
 It prints real-time factors (simulated seconds per wall second) and the ratios, so the numbers
-are comparable across noisy machines. Single process; pin it to one core with ``taskset -c 0``
-for a one-core figure.
+are comparable across noisy machines. Each run is repeated ``--repeat`` times (interleaved) and
+the fastest is kept, like ``timeit``; a second column uses the process CPU time, which other
+processes on a shared machine disturb less. Single process and thread; pin it to one core with
+``taskset -c 0`` for a strict one-core figure. ``--stages`` adds the per-call cost of each
+part of a control tick at a state taken from the IMPACT run.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import time
+import timeit
+from dataclasses import dataclass
 
 import gymnasium as gym
 import mujoco
@@ -26,43 +32,125 @@ from impact_envs.policies.protocol import stack_obs
 from impact_envs.policies.scripted import make_expert
 
 
+@dataclass
+class Timing:
+    """Best wall and CPU time [s] over repeats of one run."""
+
+    wall_s: float = float("inf")
+    cpu_s: float = float("inf")
+
+    def add(self, wall_s: float, cpu_s: float) -> None:
+        self.wall_s, self.cpu_s = min(self.wall_s, wall_s), min(self.cpu_s, cpu_s)
+
+
 def _run_env(env_id: str, controller: str, steps: int, seed: int, mass: float):
+    """One episode prefix; returns (env, wall s, cpu s, start state, ctrl of every tick)."""
     env = gym.make(env_id, controller=controller, object_mass=mass).unwrapped
     expert = make_expert(env_id)
     obs, _ = env.reset(seed=seed)
     expert.reset(1)
     sim = env.sim
     start_state = (sim.data.qpos.copy(), sim.data.qvel.copy(), sim.data.ctrl.copy())
-    ctrl_log: list[np.ndarray] = []
+    ctrl_log = np.zeros((steps * 34, sim.model.nu))
+    count = [0]
     plain_step = sim.step
 
     def recording_step() -> None:
-        ctrl_log.append(sim.data.ctrl.copy())
+        ctrl_log[count[0]] = sim.data.ctrl
+        count[0] += 1
         plain_step()
 
     sim.step = recording_step
-    actions = []
-    t0 = time.perf_counter()
+    wall0, cpu0 = time.perf_counter(), time.process_time()
     for _ in range(steps):
         action = expert.act(stack_obs([obs]))[0]
-        actions.append(action)
         obs, *_ = env.step(action)
-    wall = time.perf_counter() - t0
-    sim_time = len(ctrl_log) * sim.dt
-    return env, sim_time / wall, start_state, np.array(ctrl_log)
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    sim.step = plain_step
+    return env, wall, cpu, start_state, ctrl_log[: count[0]]
 
 
-def _replay_raw(env, start_state, ctrl_log: np.ndarray) -> float:
+def _replay_raw(env, start_state, ctrl_log: np.ndarray) -> tuple[float, float]:
+    """(wall s, cpu s) of raw mj_step over ``ctrl_log`` from ``start_state``."""
     m, d = env.sim.model, env.sim.data
     qpos, qvel, ctrl = start_state
     mujoco.mj_resetData(m, d)
     d.qpos[:], d.qvel[:], d.ctrl[:] = qpos, qvel, ctrl
     mujoco.mj_forward(m, d)
-    t0 = time.perf_counter()
+    wall0, cpu0 = time.perf_counter(), time.process_time()
     for u in ctrl_log:
         d.ctrl[:] = u
         mujoco.mj_step(m, d)
-    return len(ctrl_log) * m.opt.timestep / (time.perf_counter() - t0)
+    return time.perf_counter() - wall0, time.process_time() - cpu0
+
+
+def _stage_costs(env_id: str, seed: int, mass: float, steps: int) -> dict[str, float]:
+    """Per-call CPU cost [us] of each part of a tick, at the state after ``steps`` steps."""
+    env = gym.make(env_id, controller="impact", object_mass=mass).unwrapped
+    expert = make_expert(env_id)
+    obs, _ = env.reset(seed=seed)
+    expert.reset(1)
+    for _ in range(steps):
+        obs, *_ = env.step(expert.act(stack_obs([obs]))[0])
+    sim, ctrl, dyn, rng = env.sim, env.controller, env.dynamics, np.random.default_rng(0)
+    q, dq, tau = sim.read_sensors(rng)
+    pos, quat = env._target_pos, env._target_quat
+    ctrl.internal_model.learning_enabled = False  # time inference ticks; SGD is separate
+    state = mujoco.MjData(sim.model)
+    mujoco.mj_copyData(state, sim.model, sim.data)
+
+    def step() -> None:
+        mujoco.mj_copyData(sim.data, sim.model, state)
+        mujoco.mj_step(sim.model, sim.data)
+
+    def time_us(fn, number: int = 2000) -> float:
+        runs = timeit.repeat(fn, number=number, repeat=5, timer=time.process_time)
+        return min(runs) / number * 1e6
+
+    costs = {
+        "read_sensors": time_us(lambda: sim.read_sensors(rng)),
+        "gripper_width": time_us(sim.gripper_width),
+        "dynamics.update": time_us(lambda: dyn.update(q, dq)),
+        "compute (incl. update)": time_us(lambda: ctrl.compute(q, dq, tau, pos, quat)),
+        "apply": time_us(lambda: sim.apply(sim.tau_applied, -1.0)),
+        "contact_forces": time_us(sim.contact_forces),
+    }
+    copy_only = time_us(lambda: mujoco.mj_copyData(sim.data, sim.model, state), 500)
+    costs["mj_step"] = time_us(step, 500) - copy_only
+    model = ctrl.internal_model
+    x, target, mask = model.history_input().copy(), np.zeros(6, np.float32), np.ones(6, np.float32)
+    costs["SGD step (every 5th tick while learning)"] = time_us(
+        lambda: model.train_step(x, target, mask), 50
+    )
+    return costs
+
+
+def _print_table(args: argparse.Namespace, rtf: dict[str, Timing], n_ticks: int) -> None:
+    sim_s = n_ticks * 0.001
+    raw = rtf["raw"]
+    print(
+        f"env {args.env}, {args.steps} policy steps ({n_ticks} physics ticks), "
+        f"mass {args.mass} kg, seed {args.seed}, best of {args.repeat} runs each"
+    )
+    load = ", ".join(f"{v:.2f}" for v in os.getloadavg())
+    print(f"machine: {os.cpu_count()} CPUs, load average {load} (1, 5, 15 min)")
+    header = f"{'run':<28}{'real-time factor':>18}{'vs raw mj_step':>16}"
+    print(f"{header}{'CPU-time RTF':>15}{'vs raw':>9}")
+    rows = [("raw mj_step (replay)", raw)] + [
+        (f"env, controller={c}", rtf[c]) for c in ("impedance", "impact")
+    ]
+    for name, t in rows:
+        print(
+            f"{name:<28}{sim_s / t.wall_s:>17.1f}x{raw.wall_s / t.wall_s:>15.2f}x"
+            f"{sim_s / t.cpu_s:>14.1f}x{raw.cpu_s / t.cpu_s:>8.2f}x"
+        )
+    wall_over = (rtf["impact"].wall_s - raw.wall_s) / sim_s
+    cpu_over = (rtf["impact"].cpu_s - raw.cpu_s) / sim_s
+    print(
+        f"IMPACT controller+sensing overhead per simulated second: {wall_over:.3f} s "
+        f"({wall_over * sim_s / raw.wall_s:.2f}x the physics cost); CPU time {cpu_over:.3f} s "
+        f"({cpu_over * sim_s / raw.cpu_s:.2f}x)"
+    )
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -71,29 +159,22 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--steps", type=int, default=300, help="policy steps (30 Hz) per run")
     parser.add_argument("--mass", type=float, default=2.5, help="object mass [kg]")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--repeat", type=int, default=3, help="runs of each kind; best kept")
+    parser.add_argument("--stages", action="store_true", help="also print per-stage costs")
     args = parser.parse_args(argv)
-    rtf = {}
-    for controller in ("impedance", "impact"):
-        env, rtf[controller], start, log = _run_env(
-            args.env, controller, args.steps, args.seed, args.mass
-        )
-    raw = _replay_raw(env, start, log)
-    print(
-        f"env {args.env}, {args.steps} policy steps ({len(log)} physics ticks), "
-        f"mass {args.mass} kg, seed {args.seed}"
-    )
-    print(f"{'run':<28}{'real-time factor':>18}{'vs raw mj_step':>16}")
-    print(f"{'raw mj_step (replay)':<28}{raw:>17.1f}x{1.0:>15.2f}x")
-    for controller in ("impedance", "impact"):
-        print(
-            f"{'env, controller=' + controller:<28}{rtf[controller]:>17.1f}x"
-            f"{rtf[controller] / raw:>15.2f}x"
-        )
-    overhead = 1.0 / rtf["impact"] - 1.0 / raw
-    print(
-        f"IMPACT controller+sensing overhead per simulated second: {overhead:.3f} s "
-        f"({overhead * raw:.2f}x the physics cost)"
-    )
+    rtf = {k: Timing() for k in ("impedance", "impact", "raw")}
+    for _ in range(max(1, args.repeat)):
+        for controller in ("impedance", "impact"):
+            env, wall, cpu, start, log = _run_env(
+                args.env, controller, args.steps, args.seed, args.mass
+            )
+            rtf[controller].add(wall, cpu)
+        rtf["raw"].add(*_replay_raw(env, start, log))
+    _print_table(args, rtf, len(log))
+    if args.stages:
+        print(f"per-call CPU cost [us] at step {args.steps // 2} of the IMPACT run (best of 5):")
+        for name, us in _stage_costs(args.env, args.seed, args.mass, args.steps // 2).items():
+            print(f"  {name:<42}{us:8.1f}")
 
 
 if __name__ == "__main__":
