@@ -182,8 +182,10 @@ class ImpactEnv(gym.Env):
                    ) -> dict[str, float]:
         """Run the 33/34 control ticks of one policy step; return the step's metrics.
 
-        The targets of all ticks are interpolated up front (one vectorized lerp / slerp);
-        energy and peak torque are reduced once per step from per-tick rows; contact forces are
+        The targets of all ticks are interpolated up front (one vectorized lerp / slerp), and
+        the sensor-noise draws of all ticks come from one ``np_random`` call (the same numbers
+        as one call per tick: nothing else draws from ``np_random`` during the ticks); energy
+        and peak torque are reduced once per step from per-tick rows; contact forces are
         sampled every 4th tick and on the last one.
         """
         sim, ctrl, rng, task = self.sim, self.controller, self.np_random, self.task
@@ -192,6 +194,7 @@ class ImpactEnv(gym.Env):
         alphas = np.arange(1, n + 1) / n
         positions = pos0 + alphas[:, None] * (pos1 - pos0)
         quats = slerp(quat0, quat1, alphas)
+        noise = rng.standard_normal((n, 21))
         taus, qvels = np.empty((n, 7)), np.empty((n, 7))
         arm_dof = sim.arm_dof  # a slice in every scene: then a view that MuJoCo updates
         qvel_arm = data.qvel[arm_dof] if isinstance(arm_dof, slice) else None
@@ -199,7 +202,7 @@ class ImpactEnv(gym.Env):
         for i in range(1, n + 1):
             task.before_tick(sim, float(data.time))
             q, dq = control_tick(sim, ctrl, rng, positions[i - 1], quats[i - 1], gripper,
-                                 wrench_cmd, learn_mask)
+                                 wrench_cmd, learn_mask, noise[i - 1])
             taus[i - 1] = sim.tau_applied
             qvels[i - 1] = qvel_arm if qvel_arm is not None else data.qvel[arm_dof]
             if i % 4 == 0 or i == n:

@@ -20,9 +20,14 @@ def control_tick(
     gripper_cmd: float,
     wrench_cmd_world: np.ndarray | None = None,
     learn_mask: np.ndarray | None = None,
+    noise: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Run one control tick; return the sensed ``(q, dq)`` the controller used."""
-    q, dq, tau_meas = sim.read_sensors(rng)
+    """Run one control tick; return the sensed ``(q, dq)`` the controller used.
+
+    ``noise``: optional (21,) standard-normal draws for the sensor reading instead of drawing
+    them from ``rng`` (see ``FrankaSim.read_sensors``).
+    """
+    q, dq, tau_meas = sim.read_sensors(rng, noise)
     tau = controller.compute(q, dq, tau_meas, pos_target_world, quat_target_world,
                              wrench_cmd_world=wrench_cmd_world, learn_mask=learn_mask,
                              gripper_width_m=sim.gripper_width())

@@ -206,13 +206,15 @@ class FrankaSim:
     def _arm_views(self) -> tuple[np.ndarray, ...]:
         """(qpos, qvel, qfrc_actuator, qfrc_damper) of the arm, as views when contiguous.
 
-        MuJoCo allocates these arrays once per MjData, so the views are made once (again if
-        ``data`` is replaced); index arrays fall back to copies.
+        MuJoCo allocates these arrays once per MjData, so the views (and full ``qpos`` / ``ctrl``
+        views for the gripper and actuation) are made once, again if ``data`` is replaced;
+        index arrays fall back to copies.
         """
         d = self.data
         if d is not self._bound_data:
             self._views = (d.qpos[self.arm_qpos], d.qvel[self.arm_dof],
                            d.qfrc_actuator[self.arm_dof], d.qfrc_damper[self.arm_dof])
+            self._qpos, self._ctrl = d.qpos, d.ctrl
             self._bound_data = d
         if isinstance(self.arm_qpos, slice) and isinstance(self.arm_dof, slice):
             return self._views
@@ -254,15 +256,22 @@ class FrankaSim:
         """True joint positions [rad] and velocities [rad/s] (privileged)."""
         return self.data.qpos[self.arm_qpos].copy(), self.data.qvel[self.arm_dof].copy()
 
-    def read_sensors(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def read_sensors(
+        self, rng: np.random.Generator, noise: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Encoder and joint-torque sensor readings with noise: ``(q, dq, tau_measured)``.
 
         The torque sensor sits on the link side of each joint's transmission: it reads the motor
         torque minus joint damping and Coulomb friction, so the rigid-body equation
         ``M(q) q'' + C q' + g = tau_measured + tau_ext`` holds with the armature in M. The three
         arrays are views of one new (21,) array.
+
+        Args:
+            rng: Source of the 21 standard-normal draws of this reading.
+            noise: Optional (21,) draws to use instead of drawing from ``rng`` (the env draws
+                all readings of a policy step at once: the same numbers, one call).
         """
-        z = rng.standard_normal(21)
+        z = rng.standard_normal(21) if noise is None else noise
         out = np.empty(21)
         _sense(z, self._noise_stds, *self._arm_views(), self._friction_torque(), self._tau_bias,
                out)
@@ -306,7 +315,8 @@ class FrankaSim:
 
     def gripper_width(self) -> float:
         """Distance between the finger pads [m] (encoder of the hand)."""
-        qpos = self.data.qpos
+        self._arm_views()
+        qpos = self._qpos
         i, j = self._finger_ids
         return float(qpos[i] + qpos[j])
 
@@ -321,8 +331,9 @@ class FrankaSim:
 
         ``gripper_cmd`` in [-1, 1]: -1 fully open (0.08 m), +1 closed (force-limited squeeze).
         """
+        self._arm_views()
         _actuate(np.asarray(tau, dtype=np.float64), self.torque_limits, self.tau_applied,
-                 self.data.ctrl, self.arm_act, self.gripper_act, float(gripper_cmd))
+                 self._ctrl, self.arm_act, self.gripper_act, float(gripper_cmd))
 
     def step(self) -> None:
         """Advance the physics by one control tick (``dt``)."""
