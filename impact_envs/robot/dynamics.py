@@ -21,6 +21,7 @@ ROBOT_XML = Path(__file__).resolve().parent.parent / "assets" / "fr3_hand.xml"
 ARM_JOINTS = tuple(f"fr3_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("finger_joint1", "finger_joint2")
 TCP_FRAME = "tcp"
+LOCAL_WORLD_ALIGNED = pin.LOCAL_WORLD_ALIGNED
 
 
 @dataclass(frozen=True)
@@ -130,11 +131,10 @@ class PinocchioArm:
         model, data = self.model, self.data
         self._q[:] = q
         self._dq[:] = dq
-        pin.computeJointJacobians(model, data, q)
-        placement = pin.updateFramePlacement(model, data, self._tcp)
+        self.jacobian = pin.computeFrameJacobian(model, data, q, self._tcp, LOCAL_WORLD_ALIGNED)
+        placement = pin.updateFramePlacement(model, data, self._tcp)  # kinematics of that call
         self.pos_ee_world = placement.translation.copy()
         self.rot_ee_world = placement.rotation.copy()
-        self.jacobian = pin.getFrameJacobian(model, data, self._tcp, pin.LOCAL_WORLD_ALIGNED)
         self.mass_matrix[:] = pin.crba(model, data, q)
         if not self._crba_symmetric:
             mass = self.mass_matrix
