@@ -1,4 +1,4 @@
-"""Controller core of IMPACT: pure NumPy / torch, no MuJoCo (see docs/controller.md).
+"""Controller core of IMPACT: NumPy, numba kernels and torch, no MuJoCo (see docs/controller.md).
 
 Importing a submodule such as ``impact_envs.control.lie`` does not import torch; the
 controller classes are loaded on first access (``from impact_envs.control import
