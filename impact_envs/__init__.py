@@ -19,7 +19,7 @@ ENV_IDS = (
 _ENTRY_POINTS = {
     "IMPACT/Hammer-v0": ("impact_envs.envs.hammer:HammerEnv", 750),
     "IMPACT/Dumbbell-v0": ("impact_envs.envs.dumbbell:DumbbellEnv", 750),
-    "IMPACT/Calligraphy-v0": ("impact_envs.envs.calligraphy:CalligraphyEnv", 480),
+    "IMPACT/Calligraphy-v0": ("impact_envs.envs.calligraphy:CalligraphyEnv", 600),
     "IMPACT/Disturbance-v0": ("impact_envs.envs.disturbance:DisturbanceEnv", 540),
 }
 

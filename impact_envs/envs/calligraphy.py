@@ -51,10 +51,10 @@ class CalligraphyEnv(ImpactEnv):
     y ∈ [−0.06, 0.06] m, rotation ±15°, scale 0.9–1.1 (≈6 cm tall); initial joints home
     ± 0.03 rad; torque-sensor offsets. Tool mass and paper friction from the kwargs/options.
     The reference is time-indexed: 3 s at 8 cm above the first stroke, then per stroke
-    descend (5 cm/s), dwell 0.6 s, write at 3 cm/s, lift, travel; 9–15 s in total.
+    descend (5 cm/s), dwell 0.6 s, write at 3 cm/s, lift, travel; 11–18 s in total.
 
     ## Episode end
-    Truncation after 480 steps (16 s); termination on success only with
+    Truncation after 600 steps (20 s); termination on success only with
     ``terminate_on_success=True``. ``SimulationError`` if the physics diverges.
 
     ## Arguments

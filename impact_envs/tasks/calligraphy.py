@@ -60,7 +60,7 @@ class CalligraphyTask(Task):
     object_bodies = ("pen",)
     params = (TaskParam("tool_mass", 0.1, 0.02, 5.0, "kg"),
               TaskParam("surface_friction", 0.3, 0.05, 1.5, ""))
-    max_episode_steps = 480
+    max_episode_steps = 600
     workspace_low = np.array([0.15, -0.45, 0.0])
     workspace_high = np.array([0.70, 0.45, 0.60])
 
