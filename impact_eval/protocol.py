@@ -10,7 +10,8 @@ impedance. Writes ``timeseries.csv`` (30 Hz: wrenches, gate, pose error), ``metr
 Metrics (load-induced error is the vertical TCP error ``e_z`` while the object is held, so the
 lateral tracking lag of a moving impedance target does not count as load error):
 
-- "aloft": the object is grasped and at least 2 cm above where it started.
+- "aloft": the object is grasped, at least 2 cm above where it started, and the TCP target is
+  vertically still (|v_z| < 2 cm/s; a moving impedance target lags by D v / K).
 - ``adapt_time_s``: time from the grasp until ``|e_z|`` stays below 1 cm while aloft (NaN if
   never); Phase A convergence, Phase C re-adaptation.
 - ``peak_err_z_m``: worst ``|e_z|`` while aloft; Phase B's is the "zero-delay" check.
@@ -33,6 +34,9 @@ from impact_envs.policies.protocol import stack_obs
 from impact_envs.policies.scripted import make_expert
 
 PHASES = ("A", "B", "C")
+MAX_TARGET_VZ_M_S = 0.02
+"""Samples count only while the target is vertically (nearly) still: a target moving at v
+lags by about D v / K under impedance (2.5 cm at 0.25 m/s), which is not load error."""
 AXES = ("fx", "fy", "fz", "tx", "ty", "tz")
 SIGNALS = ("wrench_imp_world", "wrench_ext_world", "wrench_slow_world", "wrench_pred_world",
            "wrench_ff_world")
@@ -58,6 +62,7 @@ def run_sequence(env_id: str, controller: str, masses: tuple[float, ...],
                    "is_grasped": bool(info.get("is_grasped", False)),
                    "gate_open": bool(info["gate_open"]), "is_success": info["is_success"],
                    "object_z_m": float(obs["object_pos"][2]),
+                   "target_z_m": float(obs["ee_pos"][2] + info["pos_error_world"][2]),
                    "pose_error_m": info["pose_error_m"]}
             for axis, value in zip("xyz", info["pos_error_world"], strict=True):
                 row[f"err_{axis}_m"] = float(value)
@@ -81,7 +86,9 @@ def phase_metrics(df: pd.DataFrame) -> pd.DataFrame:
                "success": bool(ep["is_success"].any()), "adapt_time_s": np.nan,
                "peak_err_z_m": np.nan, "steady_err_z_m": np.nan}
         grasped = ep["is_grasped"].to_numpy()
-        aloft = grasped & (ep["object_z_m"].to_numpy() > ep["object_z_m"].iloc[0] + 0.02)
+        target_vz = np.gradient(ep["target_z_m"].to_numpy(), ep["t_episode_s"].to_numpy())
+        aloft = (grasped & (ep["object_z_m"].to_numpy() > ep["object_z_m"].iloc[0] + 0.02)
+                 & (np.abs(target_vz) < MAX_TARGET_VZ_M_S))
         if grasped.any() and aloft.sum() > 3:
             t_grasp = ep["t_episode_s"].to_numpy()[np.argmax(grasped)]
             ez = ep["err_z_m"].abs().to_numpy()[aloft]
