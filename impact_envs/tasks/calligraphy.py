@@ -15,6 +15,7 @@ import mujoco
 import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
+from impact_envs.policies.protocol import Policy
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import BodyMass, Task, TaskParam
@@ -199,7 +200,7 @@ class CalligraphyTask(Task):
             **self.metrics.summary(),
         }
 
-    def make_expert(self, load_compensation: bool = False):
+    def make_expert(self, load_compensation: bool = False) -> Policy:
         """The pen-following expert (``policies/scripted_calligraphy.py``)."""
         from impact_envs.policies.scripted_calligraphy import CalligraphyExpert
 

@@ -173,11 +173,13 @@ class WritingMetrics:
         self.reset()
 
     def reset(self) -> None:
+        """Forget all samples."""
         self.n = self.n_in_band = 0
         self.sq_dist = self.gap_s = 0.0
         self.contact_lost = False
 
     def in_band(self, force_n: float) -> bool:
+        """Whether a normal force [N] lies in the band."""
         return self.band[0] <= force_n <= self.band[1]
 
     def add(self, force_n: float, dist_m: float, dt_s: float) -> None:
@@ -189,6 +191,7 @@ class WritingMetrics:
         self.contact_lost |= self.gap_s > self.gap_max_s
 
     def end_stroke(self) -> None:
+        """A stroke ended: the pen may leave the paper."""
         self.gap_s = 0.0
 
     def summary(self) -> dict[str, float | bool]:

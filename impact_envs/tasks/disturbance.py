@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from impact_envs.control.lie import rot6d_from_matrix
+from impact_envs.policies.protocol import Policy
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import BodyMass, Task, TaskParam
@@ -213,7 +214,7 @@ class DisturbanceTask(Task):
             "hold_s": self.hold_s(t),
         }
 
-    def make_expert(self, load_compensation: bool = False):
+    def make_expert(self, load_compensation: bool = False) -> Policy:
         """Pick, carry to the goal and hold (``policies/scripted_disturbance.py``)."""
         from impact_envs.policies.scripted_disturbance import make_carry_hold_expert
 
