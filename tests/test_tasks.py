@@ -41,7 +41,7 @@ def test_dumbbell_resting_on_pad_is_success_and_off_pad_is_not():
     env.reset(seed=0)
     task, sim = env.task, env.sim
     pad = sim.model.body_pos[task.pad]
-    qpos = sim.data.qpos[task.qpos_adr:task.qpos_adr + 7]
+    qpos = sim.data.qpos[task.body.qpos_adr:task.body.qpos_adr + 7]
     qpos[:] = [pad[0], pad[1], PAD_TOP_M + PLATE_APOTHEM_M, 1, 0, 0, 0]
     mujoco.mj_forward(sim.model, sim.data)
     assert task.is_success(sim)

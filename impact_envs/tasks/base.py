@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from impact_envs.control.lie import rot6d_from_matrix
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.protocol import Policy
 from impact_envs.robot.sim import FrankaSim
@@ -62,6 +63,28 @@ class BodyMass:
         """Write mass [kg] and inertia [kg m^2] (COM fixed: uniform density scaling)."""
         model.body_mass[self.id] = mass_kg
         model.body_inertia[self.id] = self.nominal_inertia * (mass_kg / self.nominal_mass)
+
+
+class FreeBody:
+    """A task object on a free joint: ids looked up once, resting placement, pose observation."""
+
+    def __init__(self, model: mujoco.MjModel, body: str, joint: str) -> None:
+        self.id = model.body(body).id
+        jid = model.joint(joint).id
+        self.qpos_adr = int(model.jnt_qposadr[jid])
+        self.dof_adr = int(model.jnt_dofadr[jid])
+
+    def place(self, data: mujoco.MjData, xy: np.ndarray, z_m: float, yaw_rad: float) -> None:
+        """Put the body frame at (x, y, z) [m], turned by ``yaw_rad`` about world z, at rest."""
+        a = self.qpos_adr
+        data.qpos[a:a + 3] = [xy[0], xy[1], z_m]
+        data.qpos[a + 3:a + 7] = [np.cos(yaw_rad / 2), 0.0, 0.0, np.sin(yaw_rad / 2)]
+        data.qvel[self.dof_adr:self.dof_adr + 6] = 0.0
+
+    def observe(self, data: mujoco.MjData) -> dict[str, np.ndarray]:
+        """``object_pos`` (centre of mass, world [m]) and ``object_rot6d`` of the body."""
+        return {"object_pos": data.xipos[self.id].copy(),
+                "object_rot6d": rot6d_from_matrix(data.xmat[self.id].reshape(3, 3))}
 
 
 def refresh_constants(sim: FrankaSim) -> None:

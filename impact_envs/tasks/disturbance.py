@@ -13,11 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impact_envs.control.lie import rot6d_from_matrix
 from impact_envs.policies.protocol import Policy
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import BodyMass, Task, TaskParam
+from impact_envs.tasks.base import BodyMass, FreeBody, Task, TaskParam
 
 KINDS = ("constant", "step", "slow")
 """Disturbance profile kinds."""
@@ -110,12 +109,10 @@ class DisturbanceTask(Task):
     def bind(self, sim: FrankaSim) -> None:
         m = sim.model
         self.mass = BodyMass(m, "trough")
-        self.body = m.body("trough").id
+        self.free = FreeBody(m, "trough", "trough_free")
+        self.body = self.free.id
         self.goal_body = m.body("goal_marker").id
         self.sand = m.geom("trough_sand").id
-        joint = m.joint("trough_free").id
-        self.qpos_adr = int(m.jnt_qposadr[joint])
-        self.dof_adr = int(m.jnt_dofadr[joint])
         self.values = {p.name: p.default for p in self.params}
         self._new_episode_state(DisturbanceProfile("constant", 0.0, (1.0, 0.0, 0.0), 1.0, 4.0),
                                 3.0)
@@ -141,9 +138,7 @@ class DisturbanceTask(Task):
         m, d = sim.model, sim.data
         xy = rng.uniform(self.trough_xy_low, self.trough_xy_high)
         yaw = rng.uniform(-self.trough_yaw_max_rad, self.trough_yaw_max_rad)
-        d.qpos[self.qpos_adr:self.qpos_adr + 3] = [*xy, REST_Z_M]
-        d.qpos[self.qpos_adr + 3:self.qpos_adr + 7] = [np.cos(yaw / 2), 0, 0, np.sin(yaw / 2)]
-        d.qvel[self.dof_adr:self.dof_adr + 6] = 0.0
+        self.free.place(d, xy, REST_Z_M, yaw)
         m.body_pos[self.goal_body] = rng.uniform(self.goal_low, self.goal_high)
         profile = DisturbanceProfile.sample(rng, self.values["disturbance_n"])
         self._new_episode_state(profile, float(rng.uniform(*self.load_delay_s)))
@@ -192,12 +187,8 @@ class DisturbanceTask(Task):
 
     # ------------------------------------------------------------- observation
     def observation(self, sim: FrankaSim) -> dict[str, np.ndarray]:
-        d = sim.data
-        return {
-            "object_pos": d.xipos[self.body].copy(),
-            "object_rot6d": rot6d_from_matrix(d.xmat[self.body].reshape(3, 3)),
-            "goal_pos": sim.model.body_pos[self.goal_body].copy(),
-        }
+        return {**self.free.observe(sim.data),
+                "goal_pos": sim.model.body_pos[self.goal_body].copy()}
 
     def is_success(self, sim: FrankaSim) -> bool:
         return self.hold_s(float(sim.data.time)) >= HOLD_S

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.control.lie import rot6d_from_matrix
 from impact_envs.policies.scripted import PickPlaceExpert, PickPlaceSpec
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import BodyMass, Task, TaskParam
+from impact_envs.tasks.base import BodyMass, FreeBody, Task, TaskParam
 
 PLATE_APOTHEM_M = 0.0433
 """Half height of the hexagonal plates [m]: the bar centre (= COM) height when lying flat."""
@@ -42,12 +41,10 @@ class DumbbellTask(Task):
     def bind(self, sim: FrankaSim) -> None:
         m = sim.model
         self.mass = BodyMass(m, "dumbbell")
-        self.dumbbell = m.body("dumbbell").id
+        self.body = FreeBody(m, "dumbbell", "dumbbell_free")
+        self.dumbbell = self.body.id
         self.pad = m.body("pad").id
         self.plates = np.array([m.geom(f"dumbbell_plate_{s}").id for s in ("px", "nx")])
-        joint = m.joint("dumbbell_free").id
-        self.qpos_adr = int(m.jnt_qposadr[joint])
-        self.dof_adr = int(m.jnt_dofadr[joint])
 
     def apply_params(self, sim: FrankaSim, values: dict[str, float]) -> None:
         self.mass.set(sim.model, values["object_mass"])
@@ -56,19 +53,12 @@ class DumbbellTask(Task):
         m, d = sim.model, sim.data
         xy = rng.uniform(self.dumbbell_xy_low, self.dumbbell_xy_high)
         yaw = rng.uniform(-self.dumbbell_yaw_max_rad, self.dumbbell_yaw_max_rad)
-        d.qpos[self.qpos_adr:self.qpos_adr + 3] = [*xy, PLATE_APOTHEM_M]
-        d.qpos[self.qpos_adr + 3:self.qpos_adr + 7] = [np.cos(yaw / 2), 0, 0, np.sin(yaw / 2)]
-        d.qvel[self.dof_adr:self.dof_adr + 6] = 0.0
+        self.body.place(d, xy, PLATE_APOTHEM_M, yaw)
         m.body_pos[self.pad, :2] = rng.uniform(self.pad_xy_low, self.pad_xy_high)
         return HOME_Q + rng.uniform(-0.03, 0.03, size=7)
 
     def observation(self, sim: FrankaSim) -> dict[str, np.ndarray]:
-        d = sim.data
-        return {
-            "object_pos": d.xipos[self.dumbbell].copy(),
-            "object_rot6d": rot6d_from_matrix(d.xmat[self.dumbbell].reshape(3, 3)),
-            "goal_pos": sim.model.body_pos[self.pad].copy(),
-        }
+        return {**self.body.observe(sim.data), "goal_pos": sim.model.body_pos[self.pad].copy()}
 
     def _on_pad(self, sim: FrankaSim) -> tuple[bool, bool]:
         """(both plates above the pad footprint, COM at the lying-flat height on the pad)."""
@@ -83,7 +73,7 @@ class DumbbellTask(Task):
         footprint, height = self._on_pad(sim)
         if not (footprint and height):
             return False
-        speed = np.linalg.norm(sim.data.qvel[self.dof_adr:self.dof_adr + 3])
+        speed = np.linalg.norm(sim.data.qvel[self.body.dof_adr:self.body.dof_adr + 3])
         return bool(speed < REST_SPEED_M_S and sim.object_finger_contacts("dumbbell") == 0)
 
     def info(self, sim: FrankaSim) -> dict[str, float | bool]:

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.control.lie import rot6d_from_matrix
 from impact_envs.policies.scripted import PickPlaceExpert, PickPlaceSpec
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import BodyMass, Task, TaskParam
+from impact_envs.tasks.base import BodyMass, FreeBody, Task, TaskParam
 
 HANDLE_HALF_HEIGHT_M = 0.0125
 """Half thickness of the square handle [m]; the hammer lies flat at this COM height."""
@@ -40,12 +39,10 @@ class HammerTask(Task):
     def bind(self, sim: FrankaSim) -> None:
         m = sim.model
         self.mass = BodyMass(m, "hammer")
-        self.hammer = m.body("hammer").id
+        self.body = FreeBody(m, "hammer", "hammer_free")
+        self.hammer = self.body.id
         self.basket = m.body("basket").id
         self.com_offset = m.body_ipos[self.hammer].copy()
-        joint = m.joint("hammer_free").id
-        self.qpos_adr = int(m.jnt_qposadr[joint])
-        self.dof_adr = int(m.jnt_dofadr[joint])
 
     def apply_params(self, sim: FrankaSim, values: dict[str, float]) -> None:
         self.mass.set(sim.model, values["object_mass"])
@@ -56,19 +53,12 @@ class HammerTask(Task):
         yaw = rng.uniform(-self.hammer_yaw_max_rad, self.hammer_yaw_max_rad)
         c, s = np.cos(yaw), np.sin(yaw)
         origin_xy = com_xy - np.array([c, s]) * self.com_offset[0]
-        d.qpos[self.qpos_adr:self.qpos_adr + 3] = [*origin_xy, HANDLE_HALF_HEIGHT_M]
-        d.qpos[self.qpos_adr + 3:self.qpos_adr + 7] = [np.cos(yaw / 2), 0, 0, np.sin(yaw / 2)]
-        d.qvel[self.dof_adr:self.dof_adr + 6] = 0.0
+        self.body.place(d, origin_xy, HANDLE_HALF_HEIGHT_M, yaw)
         m.body_pos[self.basket, :2] = rng.uniform(self.basket_xy_low, self.basket_xy_high)
         return HOME_Q + rng.uniform(-0.03, 0.03, size=7)
 
     def observation(self, sim: FrankaSim) -> dict[str, np.ndarray]:
-        d = sim.data
-        return {
-            "object_pos": d.xipos[self.hammer].copy(),
-            "object_rot6d": rot6d_from_matrix(d.xmat[self.hammer].reshape(3, 3)),
-            "goal_pos": sim.model.body_pos[self.basket].copy(),
-        }
+        return {**self.body.observe(sim.data), "goal_pos": sim.model.body_pos[self.basket].copy()}
 
     def is_success(self, sim: FrankaSim) -> bool:
         d = sim.data
