@@ -78,7 +78,7 @@ def sweep_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--param",
         default=None,
-        help="name of the swept parameter; must match the env's (default: the env's)",
+        help="parameter to sweep: any the env declares (default: its first, e.g. object_mass)",
     )
     p.add_argument("--episodes", type=int, default=None,
                    help="episodes per (method, value) (default 20)")

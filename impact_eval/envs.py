@@ -79,12 +79,20 @@ class EnvInfo:
     control_dt: float | None
     max_episode_steps: int | None
     spec_json: str
+    param_names: tuple[str, ...] = ()
 
 
-def describe_env(env: gym.Env) -> EnvInfo:
-    """Read parameter name, periods [s] and the serialised spec of a built env."""
+def describe_env(env: gym.Env, requested: str | None = None) -> EnvInfo:
+    """Read parameter name, periods [s] and the serialised spec of a built env.
+
+    The swept parameter is ``requested`` (``--param``) when the env's task declares it (IMPACT
+    tasks accept every declared parameter as a reset option), else the env's first one.
+    """
     base = env.unwrapped
-    param_name = getattr(base, "param_name", None) or DEFAULT_PARAM_NAME
+    default_name = getattr(base, "param_name", None) or DEFAULT_PARAM_NAME
+    declared = tuple(p.name for p in getattr(getattr(base, "task", None), "params", ()))
+    names = declared or (str(default_name),)
+    param_name = requested if requested in names else default_name
     policy_dt = getattr(base, "policy_dt", None) or getattr(base, "dt", None)
     if policy_dt is None and env.metadata.get("render_fps"):
         policy_dt = 1.0 / float(env.metadata["render_fps"])
@@ -106,14 +114,16 @@ def describe_env(env: gym.Env) -> EnvInfo:
         control_dt=None if control_dt is None else float(control_dt),
         max_episode_steps=env.spec.max_episode_steps if env.spec is not None else None,
         spec_json=spec_json,
+        param_names=names,
     )
 
 
 def check_param(info: EnvInfo, requested: str | None) -> None:
-    """Raise unless ``requested`` (``--param``) is ``None`` or the env's parameter name."""
-    if requested is not None and requested != info.param_name:
+    """Raise unless ``requested`` (``--param``) is ``None`` or one of the env's parameters."""
+    valid = info.param_names or (info.param_name,)
+    if requested is not None and requested not in valid:
         raise InvalidArgumentError(
-            f"unknown parameter {requested!r} for {info.env_id}; valid choices: {info.param_name}"
+            f"unknown parameter {requested!r} for {info.env_id}; valid choices: {', '.join(valid)}"
         )
 
 

@@ -127,7 +127,7 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
             if spec.controller not in envs:
                 envs[spec.controller] = make_env(req.env_id, spec.controller)
         first = next(iter(envs.values()))
-        info = describe_env(first)
+        info = describe_env(first, req.param)
         check_param(info, req.param)
         probe_values(first, info.param_name, values)
         return info

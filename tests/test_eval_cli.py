@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 from test_eval_fake import ENV_ID, run_cli
 
+from impact_envs.errors import InvalidArgumentError
 from impact_eval.cli import main
 from impact_eval.methods import CHECKPOINTS_ENV_VAR
 
@@ -189,3 +190,18 @@ def test_quick_fills_defaults_and_explicit_options_win():
     assert args.env == "IMPACT/Hammer-v0" and args.grid == "0.2,2.5,5,7.5,10"
     assert args.episodes == 2 and str(args.out) == "results/quickstart"
     assert args.method in ("scripted,scripted_impact", "vanilla_dp,augmented_dp,impact")
+
+
+def test_param_selects_a_declared_secondary_parameter(tmp_path):
+    from impact_eval.envs import check_param, describe_env, make_env
+
+    env = make_env("IMPACT/Calligraphy-v0", "impedance")
+    info = describe_env(env, "surface_friction")
+    assert info.param_name == "surface_friction"
+    assert info.param_names == ("tool_mass", "surface_friction")
+    check_param(info, "surface_friction")
+    _, reset_info = env.reset(seed=0, options={"surface_friction": 0.8})
+    assert reset_info["surface_friction"] == 0.8
+    with pytest.raises(InvalidArgumentError, match="valid choices: tool_mass, surface_friction"):
+        check_param(info, "gravity")
+    env.close()

@@ -256,6 +256,7 @@ class ImpactEnv(gym.Env):
         weight = 9.81 * self._episode_params.get("object_mass", 0.0)
         info["peak_contact_force_n"] = max(m["peak_robot_contact_force_n"],
                                            m["peak_object_contact_force_n"] - weight, 0.0)
+        info.update({k: float(v) for k, v in self._episode_params.items()})
         info.update(self.task.info(self.sim))
         return info
 
