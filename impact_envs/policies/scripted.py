@@ -73,6 +73,16 @@ def _yaw_frame(direction: np.ndarray) -> np.ndarray:
     return np.column_stack([d, np.cross(z, d), z])
 
 
+def expert_masses(load_compensation: bool, n_envs: int,
+                  object_mass_kg: np.ndarray | None) -> np.ndarray:
+    """Per-env object masses [kg] for an expert's reset (required with load compensation)."""
+    if load_compensation and object_mass_kg is None:
+        raise InvalidArgumentError("load_compensation needs object_mass_kg in reset()")
+    if object_mass_kg is None:
+        return np.zeros(int(n_envs))
+    return np.asarray(object_mass_kg, dtype=float).reshape(int(n_envs))
+
+
 class PickPlaceExpert:
     """Batched closed-loop pick-and-place expert implementing the Policy protocol."""
 
@@ -83,11 +93,8 @@ class PickPlaceExpert:
 
     def reset(self, n_envs: int, object_mass_kg: np.ndarray | None = None) -> None:
         """Start ``n_envs`` new episodes; masses are needed only with load compensation."""
-        if self.load_compensation and object_mass_kg is None:
-            raise InvalidArgumentError("load_compensation needs object_mass_kg in reset()")
         self.n = int(n_envs)
-        self.mass = (np.zeros(self.n) if object_mass_kg is None
-                     else np.asarray(object_mass_kg, dtype=float).reshape(self.n))
+        self.mass = expert_masses(self.load_compensation, self.n, object_mass_kg)
         self.phase = np.zeros(self.n, dtype=int)
         self.phase_steps = np.zeros(self.n, dtype=int)
         self.target = [None] * self.n

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from impact_envs.control.lie import rot6d_from_matrix
-from impact_envs.errors import InvalidArgumentError
+from impact_envs.policies.scripted import expert_masses
 
 GRAVITY = 9.81
 R_DOWN = np.diag([1.0, -1.0, -1.0])
@@ -56,11 +56,8 @@ class CalligraphyExpert:
 
     def reset(self, n_envs: int, object_mass_kg: np.ndarray | None = None) -> None:
         """Start ``n_envs`` episodes; tool masses [kg] are needed only with load compensation."""
-        if self.load_compensation and object_mass_kg is None:
-            raise InvalidArgumentError("load_compensation needs object_mass_kg in reset()")
         self.n = int(n_envs)
-        self.mass = (np.zeros(self.n) if object_mass_kg is None
-                     else np.asarray(object_mass_kg, dtype=float).reshape(self.n))
+        self.mass = expert_masses(self.load_compensation, self.n, object_mass_kg)
         self.target: list[np.ndarray | None] = [None] * self.n
         self.prev_goal = np.full((self.n, 3), np.nan)
         self.integral = np.zeros((self.n, 2))
