@@ -149,3 +149,23 @@ def test_expert_load_compensation_raises_targets_by_mg_over_k():
             break
     else:
         pytest.fail("expert never reached the lift phase")
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_fused_tick_loop_equals_reference_loop(env_id):
+    """The one-numba-call tick path changes no number (expert episode prefix, IMPACT)."""
+    runs = []
+    for fused in (True, False):
+        env = gym.make(env_id, controller="impact").unwrapped
+        env.fused_loop = fused
+        expert = make_expert(env_id)
+        obs, _ = env.reset(seed=5)
+        expert.reset(1)
+        rows = []
+        for _ in range(60):
+            obs, _, _, _, info = env.step(expert.act(stack_obs([obs]))[0])
+            rows.append(np.concatenate([*(obs[k].ravel() for k in sorted(obs)),
+                                        info["tau_nm"], info["wrench_slow_world"],
+                                        info["wrench_pred_world"], [info["energy_j"]]]))
+        runs.append(np.array(rows))
+    np.testing.assert_array_equal(runs[0], runs[1])

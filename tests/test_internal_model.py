@@ -189,7 +189,8 @@ def test_sgd_step_matches_autograd() -> None:
     optimizer.zero_grad()
     expected_loss.backward()
     optimizer.step()
-    loss = sgd_step(model.net, x, y, mask, 0.01)
-    assert loss == pytest.approx(float(expected_loss), rel=1e-6)
+    _, weights, biases, _ = model.kernel_args()  # NumPy views of the torch parameters
+    loss = sgd_step(weights, biases, x.numpy(), y.numpy(), mask.numpy(), 0.01)
+    assert loss == pytest.approx(float(expected_loss.detach()), rel=1e-6)
     for p, p_ref in zip(model.net.parameters(), reference.parameters(), strict=True):
         np.testing.assert_allclose(p.detach().numpy(), p_ref.detach().numpy(), atol=1e-7)

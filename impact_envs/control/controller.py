@@ -106,8 +106,10 @@ class ImpactController:
     """Torque controller of the IMPACT paper for a 7-DoF arm.
 
     ``compute`` updates the dynamics and then runs every stage in one numba call
-    (``kernels.controller_tick``); only the internal model's replay insert and SGD step run in
-    Python/torch, on the ticks the kernel schedules them. Creating a controller calls
+    (``kernels.controller_tick``; with a dynamics object that exposes ``chain_params``,
+    ``chain_work`` and ``chain_state`` (``PinocchioArm``) the model update is part of the same
+    call, ``kernels.controller_tick_chain``); only the internal model's replay insert and SGD
+    step run in Python/NumPy, on the ticks the kernel schedules them. Creating a controller calls
     ``limit_torch_threads`` (torch intra-op threads := 1 when higher, process-wide).
 
     Attributes:
@@ -230,20 +232,65 @@ class ImpactController:
         q = np.asarray(q, dtype=f64)
         dq = np.asarray(dq, dtype=f64)
         dyn, model = self.dynamics, self.internal_model
-        dyn.update(q, dq)
+        chain = getattr(dyn, "chain_params", None)
+        if chain is None:
+            dyn.update(q, dq)
         cmd = self._zeros6 if wrench_cmd_world is None else np.asarray(wrench_cmd_world, f64)
         mask = model.mask_array(learn_mask)
         fric = dyn.joint_friction(dq) if self._include_friction else self._zeros7
-        flags = kernels.controller_tick(
+        args = (
             q, dq, np.asarray(tau_measured, f64), np.asarray(pos_target_world, f64),
             np.asarray(quat_target_world, f64), cmd, mask, float(gripper_width_m),
             np.asarray(fric, f64), dynamics_arrays(dyn), *self._stage_buffers,
             *model.kernel_args(), *self._law_buffers,
         )  # fmt: skip
+        if chain is None:
+            flags = kernels.controller_tick(*args)
+        else:  # the model update runs inside the same numba call
+            flags = kernels.controller_tick_chain(chain, dyn.chain_work, bool(dyn.need_coriolis),
+                                                  *dyn.chain_state, *args)
         if flags:
             self._after_tick(flags, quat_target_world, mask)
         self._fill_signals()
         return self.limiter.output.copy()
+
+    def fused_inputs(
+        self,
+        wrench_cmd_world: np.ndarray | None = None,
+        learn_mask: np.ndarray | None = None,
+    ) -> tuple[tuple, tuple] | None:
+        """Arguments of ``kernels.controller_tick_chain`` for a caller that fuses sensing,
+        control and actuation into one numba call (``impact_envs.robot.loop``).
+
+        Returns ``(head, tail)``: the call is ``controller_tick_chain(*head, q, dq, tau,
+        pos_target, quat_target, *tail[:2], gripper_width, *tail[2:])``; ``None`` when this
+        controller cannot be fused (dynamics without a chain kernel, or a joint-friction model
+        in the estimator that is not identically zero). Pass the call's result to
+        ``finish_tick``: torques and signals are then exactly those ``compute`` gives for the
+        same readings (tested).
+        """
+        dyn = self.dynamics
+        chain = getattr(dyn, "chain_params", None)
+        friction = self._include_friction and not getattr(dyn, "joint_friction_is_zero", False)
+        if chain is None or friction:
+            return None
+        if not self._is_reset:
+            raise InvalidArgumentError("invalid call order; valid: reset(q0) before compute()")
+        cmd = (self._zeros6 if wrench_cmd_world is None
+               else np.asarray(wrench_cmd_world, np.float64))
+        head = (chain, dyn.chain_work, bool(dyn.need_coriolis), *dyn.chain_state)
+        tail = (cmd, self.internal_model.mask_array(learn_mask), self._zeros7,
+                dynamics_arrays(dyn), *self._stage_buffers, *self.internal_model.kernel_args(),
+                *self._law_buffers)
+        return head, tail
+
+    def finish_tick(self, flags: int, quat_target_world: np.ndarray,
+                    learn_mask: np.ndarray | None = None) -> None:
+        """Second half of a fused tick: errors, scheduled learning, ``signals``."""
+        if flags:
+            self._after_tick(flags, quat_target_world,
+                             self.internal_model.mask_array(learn_mask))
+        self._fill_signals()
 
     def _after_tick(self, flags: int, quat_target_world: np.ndarray, mask: np.ndarray) -> None:
         """Raise on bad input / non-finite torque; run the scheduled replay insert / SGD step."""

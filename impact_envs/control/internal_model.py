@@ -245,8 +245,7 @@ class InternalModel:
             np.take(self.replay.inputs, idx, axis=0, out=bx[1:])
             np.take(self.replay.targets, idx, axis=0, out=by[1:])
             np.take(self.replay.masks, idx, axis=0, out=bm[1:])
-        loss = sgd_step(self.net, torch.from_numpy(bx), torch.from_numpy(by),
-                        torch.from_numpy(bm), self.config.learning_rate)
+        loss = sgd_step(self._weights, self._biases, bx, by, bm, self.config.learning_rate)
         self.n_updates += 1  # the fast path shares the weights' memory: no refresh
         return loss
 

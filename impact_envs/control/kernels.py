@@ -22,6 +22,8 @@ import math
 import numpy as np
 from numba import njit
 
+from impact_envs.control.chain_dynamics import chain_terms
+
 EPS_SMALL_ANGLE = 1e-8
 """Below this |vector part| the quaternion log uses its series expansion."""
 
@@ -626,6 +628,29 @@ def controller_tick(
         if not math.isfinite(v):
             flags |= NON_FINITE
     return flags
+
+
+@njit(cache=True)
+def controller_tick_chain(
+    chain, chain_work, need_coriolis, q_model, dq_model,
+    q, dq, tau_meas, pos_target, quat_target, wrench_cmd, mask, gripper_width, fric, dyn,
+    ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, imp, lim,
+) -> int:  # fmt: skip
+    """``chain_terms`` (the model update, into ``dyn``) then ``controller_tick``: one call.
+
+    ``chain`` is ``ChainParams.arrays()``; ``q_model`` / ``dq_model`` receive copies of q, dq
+    (the state the model was evaluated at).
+    """
+    for i in range(q.shape[0]):
+        q_model[i] = q[i]
+        dq_model[i] = dq[i]
+    chain_terms(chain[0], chain[1], chain[2], chain[3], chain[4], chain[5], chain[6], chain[7],
+                chain[8], q_model, dq_model, need_coriolis, chain_work, dyn[4], dyn[5], dyn[0],
+                dyn[1], dyn[3], dyn[2])
+    return controller_tick(
+        q, dq, tau_meas, pos_target, quat_target, wrench_cmd, mask, gripper_width, fric, dyn,
+        ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, imp, lim,
+    )  # fmt: skip
 
 
 @njit(cache=True)

@@ -19,7 +19,7 @@ from impact_envs.control.controller import ImpactController
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
-from impact_envs.robot.loop import control_tick
+from impact_envs.robot.loop import FusedTicks, control_tick
 from impact_envs.robot.sim import FrankaSim, SensorNoise
 from impact_envs.tasks.base import Task, refresh_constants
 
@@ -38,6 +38,10 @@ class ImpactEnv(gym.Env):
     """Shared machinery of the IMPACT environments; each task subclass documents itself."""
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": POLICY_HZ}
+    fused_loop: bool = True
+    """Run ticks through ``robot.loop.FusedTicks`` (one numba call for sensing, control and
+    actuation) when the task has no per-tick hook; False forces the reference path
+    (``control_tick``, the controller's public ``compute``). Both give identical numbers."""
 
     @classmethod
     def make_task(cls) -> Task:
@@ -199,22 +203,44 @@ class ImpactEnv(gym.Env):
         arm_dof = sim.arm_dof  # a slice in every scene: then a view that MuJoCo updates
         qvel_arm = data.qvel[arm_dof] if isinstance(arm_dof, slice) else None
         peak_robot = peak_obj = 0.0
+        fused = self._fused_ticks(noise, positions, quats, taus, qvels, gripper, wrench_cmd,
+                                  learn_mask)
         for i in range(1, n + 1):
-            task.before_tick(sim, float(data.time))
-            q, dq = control_tick(sim, ctrl, rng, positions[i - 1], quats[i - 1], gripper,
-                                 wrench_cmd, learn_mask, noise[i - 1])
-            taus[i - 1] = sim.tau_applied
-            qvels[i - 1] = qvel_arm if qvel_arm is not None else data.qvel[arm_dof]
+            if fused is not None:
+                fused.tick(i - 1)  # also records taus / qvels
+            else:
+                task.before_tick(sim, float(data.time))
+                q, dq = control_tick(sim, ctrl, rng, positions[i - 1], quats[i - 1], gripper,
+                                     wrench_cmd, learn_mask, noise[i - 1])
+                taus[i - 1] = sim.tau_applied
+                qvels[i - 1] = qvel_arm if qvel_arm is not None else data.qvel[arm_dof]
             if i % 4 == 0 or i == n:
                 f_robot, f_obj = sim.contact_forces()
                 peak_robot = max(peak_robot, f_robot)
                 peak_obj = max(peak_obj, f_obj)
         sim.check_finite()
+        if fused is not None:
+            fused.finish()
+            q, dq = fused.sensed[:7].copy(), fused.sensed[7:14].copy()
         self._q_meas, self._dq_meas = q, dq
         power = np.abs(np.einsum("ij,ij->i", taus, qvels))  # |tau . qdot| per tick [W]
         return {"energy_j": float(np.sum(power * sim.dt)),
                 "peak_torque_nm": float(np.abs(taus).max()),
                 "peak_robot_contact_force_n": peak_robot, "peak_object_contact_force_n": peak_obj}
+
+    def _fused_ticks(self, noise: np.ndarray, positions: np.ndarray, quats: np.ndarray,
+                     taus: np.ndarray, qvels: np.ndarray, gripper: float,
+                     wrench_cmd: np.ndarray | None,
+                     learn_mask: np.ndarray | None) -> FusedTicks | None:
+        """The one-numba-call-per-tick path, when nothing needs Python between the stages:
+        the task has no per-tick hook, and sim and controller support it (else None)."""
+        if not self.fused_loop or type(self.task).before_tick is not Task.before_tick:
+            return None
+        inputs = self.controller.fused_inputs(wrench_cmd, learn_mask)
+        if inputs is None or self.sim.fused_args() is None:
+            return None
+        return FusedTicks(self.sim, self.controller, inputs, noise, positions, quats, taus,
+                          qvels, gripper, learn_mask)
 
     # ------------------------------------------------------------- observation
     def _observation(self) -> dict[str, np.ndarray]:

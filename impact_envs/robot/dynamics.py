@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from impact_envs.control.chain_dynamics import ChainParams, chain_terms, make_workspace
 from impact_envs.errors import InvalidArgumentError
 
 ROBOT_XML = Path(__file__).resolve().parent.parent / "assets" / "fr3_hand.xml"
@@ -112,36 +113,25 @@ class PinocchioArm:
         self.need_coriolis = True
         self._q, self._dq = np.zeros(7), np.zeros(7)
         self._nle_data = self.model.createData()
-        self._triu = np.triu_indices(7, 1)
-        self._crba_symmetric = self._crba_returns_symmetric()
-
-    def _crba_returns_symmetric(self) -> bool:
-        """Whether this pinocchio's ``crba`` binding returns the full symmetric M (else upper)."""
-        q = 0.5 * (self.q_lower + self.q_upper) + 0.1
-        upper = pin.crba(self.model, self.model.createData(), q)
-        return bool(np.array_equal(upper, upper.T))
+        self.chain_params = ChainParams.from_pinocchio(self.model, self._tcp).arrays()
+        self.chain_work = make_workspace(self.n)
+        self.chain_state = (self._q, self._dq)
+        self.joint_friction_is_zero = True  # see joint_friction: the sensor is link-side
 
     def update(self, q: np.ndarray, dq: np.ndarray) -> None:
         """Recompute every cached quantity at joint positions ``q`` [rad], velocities ``dq``.
 
+        One numba call (``chain_dynamics.chain_terms``, parameters read from this Pinocchio model
+        and tested against Pinocchio to 1e-12); the arrays are updated in place.
         ``coriolis_matrix`` is refreshed only when ``need_coriolis`` is True (the controller
-        needs it every tick). The functions used return new arrays (jacobian, gravity,
-        Coriolis), which are kept as they are; ``mass_matrix`` is updated in place.
+        needs it every tick). Its factorization differs from ``pin.computeCoriolisMatrix``'s
+        (C is not unique) but C dq and C^T dq, the only products the controller forms, agree.
         """
-        model, data = self.model, self.data
         self._q[:] = q
         self._dq[:] = dq
-        self.jacobian = pin.computeFrameJacobian(model, data, q, self._tcp, LOCAL_WORLD_ALIGNED)
-        placement = pin.updateFramePlacement(model, data, self._tcp)  # kinematics of that call
-        self.pos_ee_world = placement.translation.copy()
-        self.rot_ee_world = placement.rotation.copy()
-        self.mass_matrix[:] = pin.crba(model, data, q)
-        if not self._crba_symmetric:
-            mass = self.mass_matrix
-            mass[self._triu[1], self._triu[0]] = mass[self._triu]
-        self.gravity = pin.computeGeneralizedGravity(model, data, q)
-        if self.need_coriolis:
-            self.coriolis_matrix = pin.computeCoriolisMatrix(model, data, q, dq)
+        chain_terms(*self.chain_params, self._q, self._dq, self.need_coriolis, self.chain_work,
+                  self.pos_ee_world, self.rot_ee_world, self.jacobian, self.mass_matrix,
+                  self.gravity, self.coriolis_matrix)
 
     @property
     def nonlinear(self) -> np.ndarray:

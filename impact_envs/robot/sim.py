@@ -273,9 +273,21 @@ class FrankaSim:
         """
         z = rng.standard_normal(21) if noise is None else noise
         out = np.empty(21)
-        _sense(z, self._noise_stds, *self._arm_views(), self._friction_torque(), self._tau_bias,
+        _sense(z, self._noise_stds, *self._arm_views(), self.friction_torque(), self._tau_bias,
                out)
         return out[:7], out[7:14], out[14:]
+
+    def fused_args(self) -> tuple | None:
+        """Sensing and actuation arrays for ``loop.fused_tick`` (valid until the next reset):
+        ``(stds, qpos, qvel, qfrc_actuator, qfrc_damper, tau_bias, full qpos, finger qpos ids,
+        torque_limits, tau_applied, ctrl, arm actuator ids, gripper actuator id)``;
+        ``None`` when the arm's state is not contiguous in MuJoCo's arrays."""
+        if not (isinstance(self.arm_qpos, slice) and isinstance(self.arm_dof, slice)):
+            return None
+        views = self._arm_views()
+        i, j = self._finger_ids
+        return (self._noise_stds, *views, self._tau_bias, self._qpos, i, j, self.torque_limits,
+                self.tau_applied, self._ctrl, self.arm_act, int(self.gripper_act))
 
     def true_joint_torque(self) -> np.ndarray:
         """Noise-free link-side joint torque of the last step [Nm] (a new array).
@@ -284,10 +296,10 @@ class FrankaSim:
         """
         tau = np.empty(7)
         qpos, qvel, qfrc_actuator, qfrc_damper = self._arm_views()
-        _link_torque(qfrc_actuator, qfrc_damper, self._friction_torque(), tau)
+        _link_torque(qfrc_actuator, qfrc_damper, self.friction_torque(), tau)
         return tau
 
-    def _friction_torque(self) -> np.ndarray:
+    def friction_torque(self) -> np.ndarray:
         """Dof Coulomb-friction constraint force on the arm joints [Nm] (zeros if none).
 
         MuJoCo orders constraint rows equality first, then dof friction (``nf`` rows, in dof
