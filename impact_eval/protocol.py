@@ -15,6 +15,10 @@ lateral tracking lag of a moving impedance target does not count as load error):
 - ``adapt_time_s``: time from the grasp until ``|e_z|`` stays below 1 cm while aloft (NaN if
   never); Phase A convergence, Phase C re-adaptation.
 - ``peak_err_z_m``: worst ``|e_z|`` while aloft; Phase B's is the "zero-delay" check.
+- ``peak_err_z_settled_m``: the same, counting only samples at least ``SETTLE_S`` after the
+  target last moved vertically: the lift's tracking lag (D v / K, decaying with the
+  closed-loop time constants, a few 0.1 s) is excluded, an uncompensated load (which stays) is
+  not.
 - ``steady_err_z_m``: median ``|e_z|`` over the last third of the time aloft.
 """
 
@@ -37,6 +41,8 @@ PHASES = ("A", "B", "C")
 MAX_TARGET_VZ_M_S = 0.02
 """Samples count only while the target is vertically (nearly) still: a target moving at v
 lags by about D v / K under impedance (2.5 cm at 0.25 m/s), which is not load error."""
+SETTLE_S = 1.0
+"""Settling time after the last vertical target motion for ``peak_err_z_settled_m`` [s]."""
 AXES = ("fx", "fy", "fz", "tx", "ty", "tz")
 SIGNALS = ("wrench_imp_world", "wrench_ext_world", "wrench_slow_world", "wrench_pred_world",
            "wrench_ff_world")
@@ -78,15 +84,24 @@ def run_sequence(env_id: str, controller: str, masses: tuple[float, ...],
     return pd.DataFrame(rows)
 
 
+def _time_since_vertical_motion(t: np.ndarray, target_vz: np.ndarray) -> np.ndarray:
+    """Per sample: time since the target last moved vertically (inf before any motion)."""
+    moving = np.abs(target_vz) >= MAX_TARGET_VZ_M_S
+    last = np.where(moving, t, -np.inf)
+    return t - np.maximum.accumulate(last)
+
+
 def phase_metrics(df: pd.DataFrame) -> pd.DataFrame:
     """Adaptation time, peak and steady vertical error while the object is held aloft."""
     out = []
     for (controller, episode), ep in df.groupby(["controller", "episode"], sort=True):
         row = {"controller": controller, "episode": episode, "phase": ep["phase"].iloc[0],
                "success": bool(ep["is_success"].any()), "adapt_time_s": np.nan,
-               "peak_err_z_m": np.nan, "steady_err_z_m": np.nan}
+               "peak_err_z_m": np.nan, "peak_err_z_settled_m": np.nan,
+               "steady_err_z_m": np.nan}
         grasped = ep["is_grasped"].to_numpy()
         target_vz = np.gradient(ep["target_z_m"].to_numpy(), ep["t_episode_s"].to_numpy())
+        settled = _time_since_vertical_motion(ep["t_episode_s"].to_numpy(), target_vz) >= SETTLE_S
         aloft = (grasped & (ep["object_z_m"].to_numpy() > ep["object_z_m"].iloc[0] + 0.02)
                  & (np.abs(target_vz) < MAX_TARGET_VZ_M_S))
         if grasped.any() and aloft.sum() > 3:
@@ -99,6 +114,9 @@ def phase_metrics(df: pd.DataFrame) -> pd.DataFrame:
             elif above[-1] + 1 < len(t):
                 row["adapt_time_s"] = float(t[above[-1] + 1] - t_grasp)
             row["peak_err_z_m"] = float(ez.max())
+            ez_settled = ep["err_z_m"].abs().to_numpy()[aloft & settled]
+            if ez_settled.size:
+                row["peak_err_z_settled_m"] = float(ez_settled.max())
             row["steady_err_z_m"] = float(np.median(ez[-max(1, len(ez) // 3):]))
         out.append(row)
     return pd.DataFrame(out)
