@@ -210,3 +210,16 @@ def test_real_hammer_pipeline(tmp_path):
     policy.reset(1)
     for _ in range(10):
         obs, *_ = env.step(policy.act(stack_obs([obs]))[0])
+
+
+def test_env_factory_sets_the_envs_own_parameter(tmp_path):
+    """--mass sets whatever the env sweeps (Calligraphy: tool_mass, not object_mass)."""
+    from impact_envs.policies.diffusion.collect import default_env_factory
+
+    cfg = CollectConfig(env_id="IMPACT/Calligraphy-v0", out=str(tmp_path / "c.zarr"),
+                        episodes=1, param=1.5, n_envs=1, progress=False)
+    env = default_env_factory(cfg)()
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(env.action_space.sample())
+    assert env.unwrapped.param_name == "tool_mass"
+    assert info["tool_mass"] == 1.5

@@ -46,13 +46,22 @@ def attempt_param(cfg: CollectConfig, attempt: int) -> float | None:
 
 
 def default_env_factory(cfg: CollectConfig) -> Callable[[], gym.Env]:
-    """Factory of ``gym.make(env_id, controller=..., [object_mass=...])``."""
+    """Factory of ``gym.make(env_id, controller=...)`` with the fixed parameter value.
+
+    The value goes to the env's own swept parameter (``env.param_name``): the ``object_mass``
+    kwarg for Hammer and Dumbbell (and envs without ``param_name``), ``task_params`` for the
+    others (Calligraphy: ``tool_mass``).
+    """
 
     def make() -> gym.Env:
-        kwargs: dict = {"controller": cfg.controller}
-        if cfg.param is not None:
-            kwargs["object_mass"] = cfg.param
-        return gym.make(cfg.env_id, **kwargs)
+        env = gym.make(cfg.env_id, controller=cfg.controller)
+        if cfg.param is None:
+            return env
+        name = getattr(env.unwrapped, "param_name", "object_mass")
+        env.close()
+        value = ({"object_mass": cfg.param} if name == "object_mass"
+                 else {"task_params": {name: cfg.param}})
+        return gym.make(cfg.env_id, controller=cfg.controller, **value)
 
     return make
 
