@@ -9,6 +9,7 @@ import pytest
 import torch
 
 from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_envs.policies.diffusion.bench import main as bench_main
 from impact_envs.policies.diffusion.bench import measure_inference, random_policy
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
@@ -143,3 +144,15 @@ def test_measure_inference_reports_costs():
     cost = measure_inference(random_policy(SMALL), batch_size=4, cycles=1)
     assert cost.ms_per_replan > 0 and cost.ms_per_env_step > 0
     assert cost.ms_per_env_step == pytest.approx(cost.ms_per_batched_step / 4)
+
+
+def test_bench_prints_policy_cost_next_to_env_cost(capsys, monkeypatch):
+    """One run prints the DDIM cost per env step, the env's step cost and their ratio."""
+    import impact_envs.policies.diffusion.bench as bench
+
+    monkeypatch.setattr(bench, "random_policy", lambda: random_policy(SMALL))
+    real = bench.measure_env_step
+    monkeypatch.setattr(bench, "measure_env_step", lambda env_id: real(env_id, steps=3))
+    bench_main(["--batch", "4", "--cycles", "1"])
+    out = capsys.readouterr().out
+    assert "IMPACT/Hammer-v0 env.step" in out and "policy cost / env cost:" in out

@@ -3,7 +3,9 @@
 Usage::
 
     python -m impact_envs.policies.diffusion.bench [--checkpoint DIR] [--batch 32] [--threads 1]
-        [--train]
+        [--train] [--env IMPACT/Hammer-v0]
+
+It also measures the env's own step cost in the same run and prints the ratio.
 
 ``measure_inference`` is the function to call next to the env step cost: it runs ``act`` on
 random observations for whole replanning cycles and reports the mean cost.
@@ -68,7 +70,8 @@ def random_policy(cfg: DiffusionConfig | None = None, seed: int = 0) -> Diffusio
 def measure_inference(
     policy: DiffusionPolicy, batch_size: int = 32, cycles: int = 3
 ) -> InferenceCost:
-    """Time ``cycles`` replanning cycles (Ta ``act`` calls each) after one warm-up cycle."""
+    """CPU time of ``cycles`` replanning cycles (Ta ``act`` calls each) after one warm-up
+    cycle (process CPU time: meaningful with ``torch.set_num_threads(1)``)."""
     rng = np.random.default_rng(0)
     dims = policy.obs_dims
     policy.reset(batch_size)
@@ -82,14 +85,38 @@ def measure_inference(
     step_times = []
     for _ in range(cycles * ta):
         batch = obs()
-        start = time.perf_counter()
+        start = time.process_time()  # CPU time: steadier on a shared machine
         policy.act(batch)
-        step_times.append(time.perf_counter() - start)
+        step_times.append(time.process_time() - start)
     replans = np.asarray(step_times).reshape(cycles, ta)[:, 0]
     per_step = 1e3 * float(np.mean(step_times))
     return InferenceCost(
         batch_size, 1e3 * float(np.median(replans)), per_step, per_step / batch_size
     )
+
+
+def measure_env_step(env_id: str, controller: str = "impact", steps: int = 90,
+                     seed: int = 0) -> float:
+    """Mean CPU milliseconds of one ``env.step`` (33-34 physics ticks with the controller),
+    driven by the scripted expert from reset (the expert's own cost excluded)."""
+    import gymnasium as gym
+
+    import impact_envs  # noqa: F401 - registers the env ids
+    from impact_envs.policies.protocol import stack_obs
+    from impact_envs.policies.scripted import make_expert
+
+    env = gym.make(env_id, controller=controller)
+    expert = make_expert(env_id)
+    obs, _ = env.reset(seed=seed)
+    expert.reset(1)
+    total = 0.0
+    for _ in range(steps):
+        action = expert.act(stack_obs([obs]))[0]
+        start = time.process_time()
+        obs, *_ = env.step(action)
+        total += time.process_time() - start
+    env.close()
+    return 1e3 * total / steps
 
 
 def measure_train_step(cfg: DiffusionConfig | None = None, steps: int = 5) -> float:
@@ -126,6 +153,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--cycles", type=int, default=3, help="timed replanning cycles")
     parser.add_argument("--threads", type=int, default=1, help="torch CPU threads")
     parser.add_argument("--train", action="store_true", help="also time training steps")
+    parser.add_argument("--env", default="IMPACT/Hammer-v0",
+                        help="env whose step cost is measured in the same run ('' skips)")
     args = parser.parse_args(argv)
     torch.set_num_threads(args.threads)
     policy = DiffusionPolicy.load(args.checkpoint) if args.checkpoint else random_policy()
@@ -138,6 +167,10 @@ def main(argv: list[str] | None = None) -> None:
     print(f"  replan (one batched DDIM call): {cost.ms_per_replan:8.2f} ms")
     print(f"  per batched env step (÷Ta):     {cost.ms_per_batched_step:8.2f} ms")
     print(f"  per single env step (÷Ta÷B):    {cost.ms_per_env_step:8.3f} ms")
+    if args.env:
+        env_ms = measure_env_step(args.env)
+        print(f"  {args.env} env.step (IMPACT controller, CPU time): {env_ms:8.3f} ms")
+        print(f"  policy cost / env cost:         {cost.ms_per_env_step / env_ms:8.1%}")
     if args.train:
         for batch in (64, 256):
             seconds = measure_train_step(dataclasses.replace(cfg, batch_size=batch))
