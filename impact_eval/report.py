@@ -86,8 +86,30 @@ def summarize(episodes: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
 
 
+def success_table_markdown(summary: pd.DataFrame) -> str:
+    """Markdown table: one row per parameter value, one column per method, cells
+    ``successes/n (rate %, Wilson 95 % CI)``; what docs/results.md quotes."""
+    name = str(summary["param_name"].iloc[0]) if len(summary) else "value"
+    methods = list(dict.fromkeys(summary["method"]))
+    lines = [f"| {name} | " + " | ".join(methods) + " |",
+             "|---" * (len(methods) + 1) + "|"]
+    for value, group in summary.groupby("param_value", sort=True):
+        cells = []
+        by_method = group.set_index("method")
+        for method in methods:
+            if method not in by_method.index:
+                cells.append("—")
+                continue
+            r = by_method.loc[method]
+            cells.append(f"{int(r['successes'])}/{int(r['n'])} ({r['success_rate']:.0%}, "
+                         f"{r['ci_low']:.0%}–{r['ci_high']:.0%})")
+        lines.append(f"| {value:g} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def write_report(out_dir: Path) -> tuple[Path, list[Path]]:
-    """Write ``summary.csv`` and every plot from ``episodes.csv``.
+    """Write ``summary.csv``, ``summary.md`` (success table) and every plot from
+    ``episodes.csv``.
 
     Returns:
         ``(summary_path, plot_paths)``.
@@ -100,4 +122,5 @@ def write_report(out_dir: Path) -> tuple[Path, list[Path]]:
     tmp = summary_path.with_name(SUMMARY_CSV + ".tmp")
     summary.to_csv(tmp, index=False)
     tmp.replace(summary_path)
+    (out_dir / "summary.md").write_text(success_table_markdown(summary))
     return summary_path, plot_all(summary, out_dir / PLOTS_DIR)

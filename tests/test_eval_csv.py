@@ -89,3 +89,19 @@ def test_format_cell_round_trips_floats() -> None:
     for value in (0.1, 1 / 3, 1e-300, 12345.678):
         assert float(format_cell(value)) == value
     assert format_cell(math.nan) == "nan" and format_cell(3) == "3"
+
+
+def test_success_table_markdown_has_one_cell_per_method_and_value():
+    import pandas as pd
+
+    from impact_eval.report import success_table_markdown
+
+    summary = pd.DataFrame({
+        "method": ["a", "a", "b"], "param_name": "object_mass", "param_value": [0.2, 5.0, 0.2],
+        "successes": [3, 0, 4], "n": [4, 4, 4], "success_rate": [0.75, 0.0, 1.0],
+        "ci_low": [0.3, 0.0, 0.5], "ci_high": [0.95, 0.5, 1.0],
+    })
+    lines = success_table_markdown(summary).splitlines()
+    assert lines[0] == "| object_mass | a | b |"
+    assert lines[2] == "| 0.2 | 3/4 (75%, 30%–95%) | 4/4 (100%, 50%–100%) |"
+    assert lines[3] == "| 5 | 0/4 (0%, 0%–50%) | — |"
