@@ -175,16 +175,9 @@ def _forward(rot_jp, pos_jp, com_j, inertia_j, q, dq, work) -> None:
 
 
 @njit(cache=True)
-def chain_terms(
-    rot_jp, pos_jp, mass, com_j, inertia_j, armature, rot_tcp, pos_tcp, gravity,
-    q, dq, need_coriolis, work, pos_ee, rot_ee, jac, mass_matrix, grav, coriolis,
-) -> None:  # fmt: skip
-    """Fill TCP pose, world-aligned TCP Jacobian (linear rows first), M, g and (optionally) C.
-
-    ``work`` comes from ``make_workspace``. All outputs are written in place.
-    """
-    n = q.shape[0]
-    _forward(rot_jp, pos_jp, com_j, inertia_j, q, dq, work)
+def _tcp_terms(work, rot_tcp, pos_tcp, pos_ee, rot_ee, jac) -> None:
+    """TCP pose from the last link's frame and the world-aligned TCP Jacobian."""
+    n = work.shape[0]
     last = work[n - 1]
     _matmul3(last[0:3], rot_tcp, rot_ee)
     col = np.empty(3)
@@ -196,6 +189,32 @@ def chain_terms(
         for r in range(3):
             jac[r, j] = col[r]
             jac[3 + r, j] = work[j, 7, r]
+
+
+@njit(cache=True)
+def _add_products(out, cols, m, jv, lin, work, rot) -> None:
+    """out[j, k] += m J_v[:, j] . lin[k] + z_j . rot[k] for j, k < cols (one link's share of
+    M with lin = J_v, rot = I z; of C with lin = J_v', rot = I z' + w x I z)."""
+    for j in range(cols):
+        zj = work[j, 7]
+        for k in range(cols):
+            out[j, k] += m * (jv[j, 0] * lin[k, 0] + jv[j, 1] * lin[k, 1]
+                              + jv[j, 2] * lin[k, 2]) + (
+                zj[0] * rot[k, 0] + zj[1] * rot[k, 1] + zj[2] * rot[k, 2])
+
+
+@njit(cache=True)
+def chain_terms(
+    rot_jp, pos_jp, mass, com_j, inertia_j, armature, rot_tcp, pos_tcp, gravity,
+    q, dq, need_coriolis, work, pos_ee, rot_ee, jac, mass_matrix, grav, coriolis,
+) -> None:  # fmt: skip
+    """Fill TCP pose, world-aligned TCP Jacobian (linear rows first), M, g and (optionally) C.
+
+    ``work`` comes from ``make_workspace``. All outputs are written in place.
+    """
+    n = q.shape[0]
+    _forward(rot_jp, pos_jp, com_j, inertia_j, q, dq, work)
+    _tcp_terms(work, rot_tcp, pos_tcp, pos_ee, rot_ee, jac)
     mass_matrix[:, :] = 0.0
     grav[:] = 0.0
     if need_coriolis:
@@ -221,12 +240,7 @@ def chain_terms(
                 _cross_diff(work[j, 7], li[11], work[j, 10], b)
                 for r in range(3):
                     djv[j, r] = a[r] + b[r]
-        for j in range(i + 1):
-            zj = work[j, 7]
-            for k in range(i + 1):
-                mass_matrix[j, k] += m * (jv[j, 0] * jv[k, 0] + jv[j, 1] * jv[k, 1]
-                                          + jv[j, 2] * jv[k, 2]) + (
-                    zj[0] * iw[k, 0] + zj[1] * iw[k, 1] + zj[2] * iw[k, 2])
+        _add_products(mass_matrix, i + 1, m, jv, jv, work, iw)
         if need_coriolis:
             w = li[9]
             for k in range(i + 1):  # a = I dz_k + w x (I z_k)
@@ -234,11 +248,6 @@ def chain_terms(
                 _cross(w, iw[k], b)
                 for r in range(3):
                     djw[k, r] = a[r] + b[r]  # reuse: rotational part of column k
-            for j in range(i + 1):
-                zj = work[j, 7]
-                for k in range(i + 1):
-                    coriolis[j, k] += m * (jv[j, 0] * djv[k, 0] + jv[j, 1] * djv[k, 1]
-                                           + jv[j, 2] * djv[k, 2]) + (
-                        zj[0] * djw[k, 0] + zj[1] * djw[k, 1] + zj[2] * djw[k, 2])
+            _add_products(coriolis, i + 1, m, jv, djv, work, djw)
     for j in range(n):
         mass_matrix[j, j] += armature[j]
