@@ -89,3 +89,13 @@ def test_sb3_method_sweeps(sac_zip: Path, tmp_path: Path) -> None:
     episodes = pd.read_csv(out / "episodes.csv")
     assert set(episodes["method"]) == {f"sb3:{sac_zip}", "fake_fast"}
     assert len(episodes) == 8
+
+
+def test_trace_prints_one_episode():
+    """python -m impact_eval.trace: header, sampled rows, and the outcome line."""
+    import impact_eval.trace as trace_mod
+
+    lines = trace_mod.trace("IMPACT/Hammer-v0", "scripted_impact", 0.2, seed=0, every=60)
+    assert lines[0] == trace_mod.HEADER
+    assert lines[-1].startswith("success: True")
+    assert len(lines) >= 4

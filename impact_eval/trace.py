@@ -1,0 +1,65 @@
+"""``python -m impact_eval.trace``: print one episode of a method, every N policy steps.
+
+Usage::
+
+    python -m impact_eval.trace --env IMPACT/Hammer-v0 --method augmented_dp --value 0.1 --seed 1
+
+Columns: policy step, TCP height, commanded target height, gripper command, object height,
+internal-model prediction / slow estimate / raw estimate of the vertical wrench [N], gate
+state. The traces quoted in docs/results.md come from this command.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from impact_envs.policies.protocol import stack_obs
+from impact_eval.envs import check_env_id, describe_env, make_env
+from impact_eval.methods import resolve_method
+
+HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate"
+
+
+def trace(env_id: str, method: str, value: float, seed: int, every: int) -> list[str]:
+    """Run one episode (until success or the step limit); return the printed lines."""
+    spec = resolve_method(method)
+    env = make_env(check_env_id(env_id), spec.controller)
+    param = describe_env(env).param_name
+    policy = spec.build(env_id, env)
+    obs, _ = env.reset(seed=seed, options={param: value})
+    policy.reset(1)
+    if hasattr(policy, "seed_envs"):  # DP sampling noise from the episode seed, as impact-eval
+        policy.seed_envs([seed])
+    lines, step, done = [HEADER], 0, False
+    while not done:
+        action = np.asarray(policy.act(stack_obs([obs]))[0])
+        obs, _, terminated, truncated, info = env.step(action)
+        done = terminated or truncated or bool(info["is_success"])
+        if step % every == 0 or done:
+            lines.append(
+                f"{step:4d} {obs['ee_pos'][2]:6.3f} {action[2]:6.3f} {action[9]:5.2f} "
+                f"{obs['object_pos'][2]:6.3f} {info['wrench_pred_world'][2]:7.1f} "
+                f"{info['wrench_slow_world'][2]:7.1f} {info['wrench_ext_world'][2]:7.1f} "
+                f"{int(info['gate_open']):5d}")
+        step += 1
+    lines.append(f"success: {bool(info['is_success'])} after {step} steps")
+    env.close()
+    return lines
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--env", default="IMPACT/Hammer-v0")
+    parser.add_argument("--method", required=True, help="a method name of impact-eval")
+    parser.add_argument("--value", type=float, required=True, help="the env's parameter value")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--every", type=int, default=30, help="print every N policy steps")
+    args = parser.parse_args(argv)
+    print("\n".join(trace(args.env, args.method, args.value, args.seed, args.every)))
+
+
+if __name__ == "__main__":
+    main()
