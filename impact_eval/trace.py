@@ -12,9 +12,11 @@ state. The traces quoted in docs/results.md come from this command.
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
+from impact_envs.errors import ImpactError
 from impact_envs.policies.protocol import stack_obs
 from impact_eval.envs import check_env_id, describe_env, make_env
 from impact_eval.methods import resolve_method
@@ -58,7 +60,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--every", type=int, default=30, help="print every N policy steps")
     args = parser.parse_args(argv)
-    print("\n".join(trace(args.env, args.method, args.value, args.seed, args.every)))
+    if args.every < 1:
+        parser.error(f"invalid --every {args.every}; valid: >= 1")
+    try:
+        lines = trace(args.env, args.method, args.value, args.seed, args.every)
+    except ImpactError as exc:  # unknown env / method, bad value, missing checkpoint
+        print(f"{parser.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        raise SystemExit(2) from None
+    print("\n".join(lines))
 
 
 if __name__ == "__main__":

@@ -19,6 +19,22 @@ def _hold_action(obs: dict[str, np.ndarray]) -> np.ndarray:
     return np.concatenate([obs["ee_pos"], obs["ee_rot6d"], [-1.0]]).astype(np.float32)
 
 
+def _expert_rollout(env: gym.Env, env_id: str, seed: int, steps: int) -> np.ndarray:
+    """(steps, d) rows of the scripted expert's episode prefix: every observation key, the
+    applied torques, slow and predicted wrench and the step energy."""
+    expert = make_expert(env_id)
+    obs, _ = env.reset(seed=seed)
+    expert.reset(1)
+    rows = []
+    for _ in range(steps):
+        obs, _, _, _, info = env.step(expert.act(stack_obs([obs]))[0])
+        rows.append(np.concatenate([*(obs[k].ravel() for k in sorted(obs)), info["tau_nm"],
+                                    info["wrench_slow_world"], info["wrench_pred_world"],
+                                    [info["energy_j"]]]))
+    env.close()
+    return np.array(rows)
+
+
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_gymnasium_check_env(env_id):
     env = gym.make(env_id)
@@ -38,21 +54,9 @@ def test_sb3_check_env(env_id):
 @pytest.mark.parametrize("env_id", ENV_IDS)
 @pytest.mark.parametrize("controller", ["impact", "impedance"])
 def test_same_seed_same_actions_identical_trajectories(env_id, controller):
-    def rollout() -> list[np.ndarray]:
-        env = gym.make(env_id, controller=controller)
-        expert = make_expert(env_id)
-        obs, _ = env.reset(seed=7)
-        expert.reset(1)
-        traj = []
-        for _ in range(40):
-            obs, _, _, _, info = env.step(expert.act(stack_obs([obs]))[0])
-            traj.append(np.concatenate([*obs.values(), info["tau_nm"]]))
-        env.close()
-        return traj
-
-    a, b = rollout(), rollout()
-    for x, y in zip(a, b, strict=True):
-        np.testing.assert_array_equal(x, y)
+    a = _expert_rollout(gym.make(env_id, controller=controller), env_id, seed=7, steps=40)
+    b = _expert_rollout(gym.make(env_id, controller=controller), env_id, seed=7, steps=40)
+    np.testing.assert_array_equal(a, b)
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
@@ -156,16 +160,7 @@ def test_fused_tick_loop_equals_reference_loop(env_id):
     """The one-numba-call tick path changes no number (expert episode prefix, IMPACT)."""
     runs = []
     for fused in (True, False):
-        env = gym.make(env_id, controller="impact").unwrapped
-        env.fused_loop = fused
-        expert = make_expert(env_id)
-        obs, _ = env.reset(seed=5)
-        expert.reset(1)
-        rows = []
-        for _ in range(60):
-            obs, _, _, _, info = env.step(expert.act(stack_obs([obs]))[0])
-            rows.append(np.concatenate([*(obs[k].ravel() for k in sorted(obs)),
-                                        info["tau_nm"], info["wrench_slow_world"],
-                                        info["wrench_pred_world"], [info["energy_j"]]]))
-        runs.append(np.array(rows))
+        env = gym.make(env_id, controller="impact")
+        env.unwrapped.fused_loop = fused
+        runs.append(_expert_rollout(env, env_id, seed=5, steps=60))
     np.testing.assert_array_equal(runs[0], runs[1])

@@ -99,3 +99,17 @@ def test_trace_prints_one_episode():
     assert lines[0] == trace_mod.HEADER
     assert lines[-1].startswith("success: True")
     assert len(lines) >= 4
+
+
+@pytest.mark.parametrize("argv", [["--method", "nope", "--value", "1"],
+                                  ["--method", "scripted", "--value", "-3"],
+                                  ["--env", "IMPACT/Nope-v0", "--method", "scripted",
+                                   "--value", "1"]])
+def test_trace_bad_input_is_one_line_exit_2(argv, capsys):
+    import impact_eval.trace as trace_mod
+
+    with pytest.raises(SystemExit) as exc:
+        trace_mod.main(argv)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "error" in err
