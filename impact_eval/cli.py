@@ -92,8 +92,8 @@ def sweep_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--envs-per-worker",
         type=int,
-        default=4,
-        help="envs each worker steps in lockstep with one batched policy call",
+        default=20,
+        help="envs each worker steps in lockstep with one batched policy call (default 20)",
     )
     p.add_argument("--seed", type=int, default=0, help="base seed of the paired episode seeds")
     p.add_argument(

@@ -66,7 +66,8 @@ class LockstepBatch:
     """Runs ``len(jobs)`` episodes on ``envs`` in lockstep; finished envs stop being stepped.
 
     Finished envs keep their last observation in the batch so that a stateful policy's rows stay
-    aligned; their actions are discarded.
+    aligned; their actions are discarded, and a policy with ``finish_envs(indices)`` is told so
+    (the diffusion policy then samples chunks only for the envs still running).
     """
 
     def __init__(self, envs: Sequence[object], policy: Policy, param_name: str, policy_dt: float):
@@ -144,8 +145,12 @@ class LockstepBatch:
             self._finish(i, tracker, reason, on_finish)
         return obs
 
-    @staticmethod
-    def _finish(i: int, tracker: EpisodeTracker, reason: str, on_finish: FinishCallback) -> None:
-        """Close episode ``i`` and report its metric columns."""
+    def _finish(
+        self, i: int, tracker: EpisodeTracker, reason: str, on_finish: FinishCallback
+    ) -> None:
+        """Close episode ``i``, tell the policy (optional ``finish_envs``), report its row."""
         tracker.finish(reason)
+        finish_envs = getattr(self.policy, "finish_envs", None)
+        if callable(finish_envs):  # optional: stop computing actions that would be discarded
+            finish_envs([i])
         on_finish(i, tracker.row())

@@ -85,6 +85,25 @@ def test_seed_envs_makes_noise_follow_the_episode():
         policy.seed_envs([1])
 
 
+def test_finish_envs_samples_only_live_envs(monkeypatch):
+    policy = random_policy(SMALL)
+    calls = []
+    original = policy.predict_chunk
+    monkeypatch.setattr(policy, "predict_chunk", lambda envs: calls.append(envs) or original(envs))
+    policy.reset(3)
+    first = policy.act(_obs(policy, 3, 0))
+    policy.finish_envs([1])
+    for t in range(1, 9):
+        actions = policy.act(_obs(policy, 3, t))
+    assert [c.tolist() for c in calls] == [[0, 1, 2], [0, 2]]  # step 8 replans live envs only
+    last_of_chunk = policy._queue[1, -1]
+    np.testing.assert_array_equal(actions[1], last_of_chunk)  # finished env repeats its last
+    assert not np.array_equal(actions[0], first[0])
+    policy.reset_envs([1])
+    policy.act(_obs(policy, 3, 9))
+    assert calls[-1].tolist() == [1]
+
+
 def test_checkpoint_round_trip_identical_actions(tmp_path):
     policy = random_policy(SMALL, seed=3)
     policy.meta = {"train_step": 5}

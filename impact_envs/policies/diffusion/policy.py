@@ -90,6 +90,7 @@ class DiffusionPolicy:
         self._fresh = np.ones(n_envs, dtype=bool)
         self._queue = np.zeros((n_envs, cfg.n_action_steps, ACTION_DIM), dtype=np.float32)
         self._queue_pos = np.full(n_envs, cfg.n_action_steps)
+        self._live = np.ones(n_envs, dtype=bool)
         self._generators = [env_generator(self.seed, i) for i in range(n_envs)]
 
     def seed_envs(self, episode_seeds: Sequence[int]) -> None:
@@ -105,7 +106,17 @@ class DiffusionPolicy:
     def reset_envs(self, indices: np.ndarray | list[int]) -> None:
         """Start a new episode in envs ``indices`` only (their generators continue)."""
         self._fresh[indices] = True
+        self._live[indices] = True
         self._queue_pos[indices] = self.cfg.n_action_steps
+
+    def finish_envs(self, indices: np.ndarray | list[int]) -> None:
+        """Envs ``indices`` ended their episodes: sample no more chunks for them.
+
+        Their rows of ``act`` then repeat their last action (the caller discards them), so a
+        lockstep batch whose episodes end at different times pays the network only for the
+        envs still running. ``reset`` / ``reset_envs`` make them live again.
+        """
+        self._live[indices] = False
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Return ``(B, 10)`` float32 actions for the batched observation ``obs``."""
@@ -115,12 +126,14 @@ class DiffusionPolicy:
                 raise InvalidArgumentError(f"got {flat.shape[0]} envs, reset was for {self.n_envs}")
             self.reset(flat.shape[0])
         self._push_history(flat)
-        replan = np.flatnonzero(self._queue_pos >= self.cfg.n_action_steps)
+        steps = self.cfg.n_action_steps
+        replan = np.flatnonzero((self._queue_pos >= steps) & self._live)
         if replan.size:
             self._queue[replan] = self.predict_chunk(replan)
             self._queue_pos[replan] = 0
-        actions = self._queue[np.arange(self.n_envs), self._queue_pos].copy()
-        self._queue_pos += 1
+        position = np.minimum(self._queue_pos, steps - 1)  # finished envs: last action
+        actions = self._queue[np.arange(self.n_envs), position].copy()
+        self._queue_pos = np.minimum(self._queue_pos + 1, steps)
         return actions
 
     def _flat_obs(self, obs: Mapping[str, np.ndarray]) -> torch.Tensor:
