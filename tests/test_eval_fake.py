@@ -93,19 +93,30 @@ class FakeEnv(gym.Env):
 
 
 class FakePolicy:
-    """Batched stateful policy: pushes at ``push`` plus a little global-RNG noise."""
+    """Batched stateful policy: pushes at ``push`` plus a little per-episode noise.
+
+    The noise of env i comes from a generator seeded by ``seed_envs`` with its episode seed
+    (as the diffusion policy does), so an episode's row does not depend on how the sweep
+    grouped episodes into batches (a resumed sweep regroups what is left).
+    """
 
     def __init__(self, push: float) -> None:
         self.push = push
         self.n_envs = 0
+        self._rngs: list[np.random.Generator] = []
 
     def reset(self, n_envs: int) -> None:
         self.n_envs = n_envs
+        self._rngs = [np.random.default_rng(i) for i in range(n_envs)]
+
+    def seed_envs(self, seeds: list[int]) -> None:
+        self._rngs = [np.random.default_rng(s) for s in seeds]
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         assert obs["progress"].shape == (self.n_envs, 1), "batch size must match reset(n)"
         actions = np.zeros((self.n_envs, 10), np.float32)
-        actions[:, 0] = self.push + 0.1 * np.random.uniform(-1, 1, self.n_envs)
+        noise = np.array([rng.uniform(-1, 1) for rng in self._rngs])
+        actions[:, 0] = self.push + 0.1 * noise
         return actions
 
 
