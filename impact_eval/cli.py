@@ -97,6 +97,14 @@ def sweep_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--seed", type=int, default=0, help="base seed of the paired episode seeds")
     p.add_argument(
+        "--controller-set",
+        action="append",
+        default=[],
+        metavar="SECTION.FIELD=VALUE",
+        help="change one controller setting from the paper's defaults (repeatable; ablations), "
+        "e.g. internal_model.slow_rate_max=1.5; recorded in run.json",
+    )
+    p.add_argument(
         "--resume",
         action="store_true",
         help="continue OUT: skip (method, value, episode) rows already written",
@@ -170,6 +178,7 @@ def run_sweep_command(argv: Sequence[str]) -> int:
         envs_per_worker=a.envs_per_worker,
         seed=a.seed,
         resume=a.resume,
+        controller_overrides=tuple(a.controller_set),
     )
     plan = prepare(request)
     t0 = time.perf_counter()

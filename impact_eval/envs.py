@@ -51,13 +51,22 @@ def check_env_id(env_id: str) -> str:
     return bare_id
 
 
-def make_env(env_id: str, controller: str) -> gym.Env:
+def make_env(env_id: str, controller: str, overrides: Sequence[str] = ()) -> gym.Env:
     """``gym.make(env_id, controller=controller)`` with errors turned into ``ImpactError``.
 
     IMPACT envs end an episode at success (``terminate_on_success=True``): success is then
-    final, and a sweep does not spend the remaining steps of solved episodes.
+    final, and a sweep does not spend the remaining steps of solved episodes. ``overrides``
+    (``SECTION.FIELD=VALUE``, ``control.overrides``) change the controller's config from the
+    paper's defaults, for ablations.
     """
-    extra = {"terminate_on_success": True} if env_id.split(":")[-1].startswith("IMPACT/") else {}
+    extra: dict[str, object] = {}
+    if env_id.split(":")[-1].startswith("IMPACT/"):
+        extra["terminate_on_success"] = True
+    if overrides:
+        from impact_envs.control.config import ControllerConfig
+        from impact_envs.control.overrides import apply_overrides
+
+        extra["controller_config"] = apply_overrides(ControllerConfig(), overrides)
     try:
         return gym.make(env_id, controller=controller, **extra)
     except ImpactError:

@@ -36,6 +36,7 @@ def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict
             "param_name": cfg.param_name,
             "values": list(cfg.values),
             "methods": list(cfg.methods),
+            "controller_overrides": list(cfg.controller_overrides),
         },
         "env": {
             "id": plan.env.env_id,

@@ -11,6 +11,8 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from impact_envs.control.config import ControllerConfig
+from impact_envs.control.overrides import apply_overrides
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_eval import csvio, runinfo
 from impact_eval.envs import (
@@ -41,6 +43,7 @@ class SweepRequest:
     envs_per_worker: int
     seed: int
     resume: bool
+    controller_overrides: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -125,7 +128,9 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
     try:
         for spec in specs:
             if spec.controller not in envs:
-                envs[spec.controller] = make_env(req.env_id, spec.controller)
+                envs[spec.controller] = make_env(
+                    req.env_id, spec.controller, req.controller_overrides
+                )
         first = next(iter(envs.values()))
         info = describe_env(first, req.param)
         check_param(info, req.param)
@@ -156,13 +161,17 @@ def _build_policies(req: SweepRequest, specs: list[MethodSpec], env_id: str) -> 
 def prepare(req: SweepRequest) -> Plan:
     """Validate a sweep request without creating any file."""
     check_numbers(req)
+    if req.controller_overrides:  # bad overrides fail here, before any env is built
+        apply_overrides(ControllerConfig(), req.controller_overrides)
     values = parse_grid(req.grid)
     check_env_id(req.env_id)  # imports the env's module, which may register methods too
     specs = parse_methods(req.methods)
     info = _inspect_env(req, specs, values)
     check_out_dir(req.out)
     previous = runinfo.read_run_json(req.out) if req.resume else None
-    runinfo.check_resumable(previous, req.env_id, req.seed, info.param_name)
+    runinfo.check_resumable(
+        previous, req.env_id, req.seed, info.param_name, req.controller_overrides
+    )
     done = load_done(req, info, values)
     _build_policies(req, specs, info.env_id)
     config = SweepConfig(
@@ -176,5 +185,6 @@ def prepare(req: SweepRequest) -> Plan:
         seed=req.seed,
         workers=req.workers,
         envs_per_worker=req.envs_per_worker,
+        controller_overrides=tuple(req.controller_overrides),
     )
     return Plan(config=config, env=info, out=req.out, done=done, previous_run=previous)

@@ -97,12 +97,22 @@ def write_run_json(out_dir: Path, data: dict) -> None:
     os.replace(tmp, path)
 
 
-def check_resumable(previous: dict | None, env_id: str, seed: int, param_name: str) -> None:
-    """Refuse ``--resume`` into a run made with a different env, seed or parameter."""
+def check_resumable(
+    previous: dict | None,
+    env_id: str,
+    seed: int,
+    param_name: str,
+    controller_overrides: tuple[str, ...] = (),
+) -> None:
+    """Refuse ``--resume`` into a run made with a different env, seed, parameter or
+    controller overrides."""
     if previous is None:
         return
     args = previous.get("args", {})
-    for key, now in (("env", env_id), ("seed", seed), ("param_name", param_name)):
+    overrides = list(controller_overrides)
+    checks = (("env", env_id), ("seed", seed), ("param_name", param_name),
+              ("controller_overrides", overrides))
+    for key, now in checks:
         if key in args and args[key] != now:
             raise InvalidArgumentError(
                 f"cannot resume: {key} was {args[key]!r} in run.json, now {now!r}; "

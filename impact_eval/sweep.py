@@ -43,6 +43,8 @@ class SweepConfig:
     seed: int
     workers: int
     envs_per_worker: int
+    controller_overrides: tuple[str, ...] = ()
+    """``SECTION.FIELD=VALUE`` changes of the controller config (ablations; empty: paper's)."""
 
 
 @dataclass(frozen=True)
@@ -92,7 +94,7 @@ class Worker:
 
         envs = self.envs.setdefault(controller, [])
         while len(envs) < n:
-            envs.append(make_env(self.cfg.env_id, controller))
+            envs.append(make_env(self.cfg.env_id, controller, self.cfg.controller_overrides))
         return envs
 
     def _policy(self, method: str) -> Policy:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -24,10 +25,11 @@ from impact_eval.methods import resolve_method
 HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate"
 
 
-def trace(env_id: str, method: str, value: float, seed: int, every: int) -> list[str]:
+def trace(env_id: str, method: str, value: float, seed: int, every: int,
+          overrides: Sequence[str] = ()) -> list[str]:
     """Run one episode (until success or the step limit); return the printed lines."""
     spec = resolve_method(method)
-    env = make_env(check_env_id(env_id), spec.controller)
+    env = make_env(check_env_id(env_id), spec.controller, overrides)
     param = describe_env(env).param_name
     policy = spec.build(env_id, env)
     obs, _ = env.reset(seed=seed, options={param: value})
@@ -59,11 +61,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--value", type=float, required=True, help="the env's parameter value")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--every", type=int, default=30, help="print every N policy steps")
+    parser.add_argument("--controller-set", action="append", default=[],
+                        metavar="SECTION.FIELD=VALUE", help="as impact-eval --controller-set")
     args = parser.parse_args(argv)
     if args.every < 1:
         parser.error(f"invalid --every {args.every}; valid: >= 1")
     try:
-        lines = trace(args.env, args.method, args.value, args.seed, args.every)
+        lines = trace(args.env, args.method, args.value, args.seed, args.every,
+                      args.controller_set)
     except ImpactError as exc:  # unknown env / method, bad value, missing checkpoint
         print(f"{parser.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise SystemExit(2) from None

@@ -129,6 +129,10 @@ BAD_INPUTS = {
     "out under a file": (["--out", "{tmp}/afile/sub"], "not writable"),
     "out on /proc": (["--out", "/proc/impact-eval-test"], "not writable"),
     "unknown option": (["--mases", "1"], "unrecognized arguments"),
+    "unknown controller field": (
+        ["--controller-set", "internal_model.lr=1"],
+        "unknown field 'lr' of controller config section 'internal_model'; valid:",
+    ),
     "no scripted expert": (["--method", "scripted"], "cannot build method 'scripted'"),
 }
 

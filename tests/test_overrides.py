@@ -1,0 +1,71 @@
+"""Controller-config overrides from the command line (SECTION.FIELD=VALUE)."""
+
+from __future__ import annotations
+
+import pytest
+
+from impact_envs.control.config import ControllerConfig
+from impact_envs.control.overrides import apply_overrides
+from impact_envs.errors import InvalidArgumentError
+
+
+def test_overrides_parse_by_field_type_and_leave_the_rest() -> None:
+    base = ControllerConfig()
+    cfg = apply_overrides(
+        base,
+        [
+            "internal_model.slow_rate_max=1.5",
+            "internal_model.update_every=2",
+            "slow_wrench.rate_force_per_s=20",
+            "impedance.stiffness_translational_n_per_m=800,800,800",
+            "impedance.compensate_coriolis=false",
+            "impedance.nullspace_damping_nms_per_rad=3",
+            "estimator.kind=momentum",
+        ],
+    )
+    assert cfg.internal_model.slow_rate_max == 1.5
+    assert cfg.internal_model.update_every == 2 and isinstance(cfg.internal_model.update_every, int)
+    assert cfg.slow_wrench.rate_force_per_s == 20.0
+    assert cfg.impedance.stiffness_translational_n_per_m == (800.0, 800.0, 800.0)
+    assert cfg.impedance.compensate_coriolis is False
+    assert cfg.impedance.nullspace_damping_nms_per_rad == 3.0
+    assert cfg.estimator.kind == "momentum"
+    assert cfg.internal_model.learning_rate == base.internal_model.learning_rate
+    assert cfg.slow_wrench.clip_force_n == base.slow_wrench.clip_force_n
+    assert apply_overrides(base, []) == base
+
+
+@pytest.mark.parametrize(
+    ("item", "message"),
+    [
+        ("internal_model.slow_rate_max", "SECTION.FIELD=VALUE"),
+        ("slow_rate_max=1", "SECTION.FIELD=VALUE"),
+        ("brain.lr=1", "valid: ['estimator', 'impedance', 'internal_model'"),
+        ("internal_model.lr=1", "valid: ['history_length'"),
+        ("internal_model.slow_rate_max=fast", "expected float"),
+        ("impedance.compensate_gravity=maybe", "expected bool"),
+        ("internal_model.slow_rate_max=-1", "valid: finite values > 0"),
+        ("estimator.kind=kalman", "kalman"),
+    ],
+)
+def test_bad_overrides_are_one_line_errors(item: str, message: str) -> None:
+    with pytest.raises(InvalidArgumentError) as err:
+        apply_overrides(ControllerConfig(), [item])
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_make_env_applies_overrides_and_resume_refuses_other_overrides() -> None:
+    from impact_eval.envs import make_env
+    from impact_eval.runinfo import check_resumable
+
+    env = make_env("IMPACT/Hammer-v0", "impact", ("internal_model.slow_rate_max=1.5",))
+    assert env.unwrapped.controller.config.internal_model.slow_rate_max == 1.5
+    env.close()
+    plain = make_env("IMPACT/Hammer-v0", "impact")
+    assert plain.unwrapped.controller.config == ControllerConfig()
+    plain.close()
+    previous = {"args": {"env": "IMPACT/Hammer-v0", "seed": 0, "param_name": "object_mass",
+                         "controller_overrides": []}}
+    check_resumable(previous, "IMPACT/Hammer-v0", 0, "object_mass", ())
+    with pytest.raises(InvalidArgumentError, match="controller_overrides"):
+        check_resumable(previous, "IMPACT/Hammer-v0", 0, "object_mass", ("slow_wrench.clip_force_n=5",))
