@@ -7,6 +7,7 @@ step). Workers stream each finished episode's row to the parent, the only writer
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
 import os
 import queue
@@ -145,9 +146,24 @@ def _exit_if_orphaned() -> None:
         os._exit(0)
 
 
+def single_threaded_torch() -> None:
+    """One intra-op and one inter-op thread for torch in this process.
+
+    Workers already share the cores; the env variable alone is not enough because the
+    forkserver may have imported torch (with one thread per core) before the worker starts.
+    One thread also keeps the network's numerics independent of the machine's core count.
+    """
+    os.environ["OMP_NUM_THREADS"] = "1"
+    import torch
+
+    torch.set_num_threads(1)
+    with contextlib.suppress(RuntimeError):  # set once per process; fine if already set
+        torch.set_num_interop_threads(1)
+
+
 def _worker_main(cfg: SweepConfig, tasks: mp.Queue, results: mp.Queue) -> None:
     """Worker process: pull tasks until a ``None`` sentinel, stream rows back."""
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    single_threaded_torch()
     try:
         worker = Worker(cfg)
         while True:

@@ -209,3 +209,23 @@ def test_param_selects_a_declared_secondary_parameter(tmp_path):
     with pytest.raises(InvalidArgumentError, match="valid choices: tool_mass, surface_friction"):
         check_param(info, "gravity")
     env.close()
+
+
+def _torch_threads_in_worker(queue) -> None:  # module level: picklable for the worker
+    from impact_eval.sweep import single_threaded_torch
+
+    single_threaded_torch()
+    import torch
+
+    queue.put(torch.get_num_threads())
+
+
+def test_sweep_workers_run_torch_single_threaded() -> None:
+    from impact_eval.sweep import _context
+
+    ctx = _context()
+    queue = ctx.Queue()
+    proc = ctx.Process(target=_torch_threads_in_worker, args=(queue,))
+    proc.start()
+    assert queue.get(timeout=60) == 1
+    proc.join(timeout=10)

@@ -64,8 +64,16 @@ def test_make_env_applies_overrides_and_resume_refuses_other_overrides() -> None
     plain = make_env("IMPACT/Hammer-v0", "impact")
     assert plain.unwrapped.controller.config == ControllerConfig()
     plain.close()
-    previous = {"args": {"env": "IMPACT/Hammer-v0", "seed": 0, "param_name": "object_mass",
-                         "controller_overrides": []}}
+    previous = {
+        "args": {
+            "env": "IMPACT/Hammer-v0",
+            "seed": 0,
+            "param_name": "object_mass",
+            "controller_overrides": [],
+        }
+    }
     check_resumable(previous, "IMPACT/Hammer-v0", 0, "object_mass", ())
     with pytest.raises(InvalidArgumentError, match="controller_overrides"):
-        check_resumable(previous, "IMPACT/Hammer-v0", 0, "object_mass", ("slow_wrench.clip_force_n=5",))
+        check_resumable(
+            previous, "IMPACT/Hammer-v0", 0, "object_mass", ("slow_wrench.clip_force_n=5",)
+        )
