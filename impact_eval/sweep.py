@@ -11,7 +11,7 @@ import contextlib
 import multiprocessing as mp
 import os
 import queue
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 from tqdm import tqdm
@@ -146,14 +146,38 @@ def _exit_if_orphaned() -> None:
         os._exit(0)
 
 
+THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+"""Thread-count variables read by OpenMP (torch), NumPy's OpenBLAS and MKL when they load."""
+
+
+@contextlib.contextmanager
+def single_threaded_children() -> Iterator[None]:
+    """Processes started inside (and the forkserver, if it starts here) see one thread each.
+
+    NumPy's OpenBLAS sizes its thread pool when NumPy is imported, which in a worker happens
+    while the worker function is unpickled, before any of its code runs; so the variables must
+    already be in the environment the worker inherits. Without them each worker had a second,
+    busy BLAS thread (the internal model's SGD matmuls) competing for the 2 cores.
+    """
+    saved = {k: os.environ.get(k) for k in THREAD_ENV}
+    os.environ.update(dict.fromkeys(THREAD_ENV, "1"))
+    try:
+        yield
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
 def single_threaded_torch() -> None:
     """One intra-op and one inter-op thread for torch in this process.
 
-    Workers already share the cores; the env variable alone is not enough because the
-    forkserver may have imported torch (with one thread per core) before the worker starts.
-    One thread also keeps the network's numerics independent of the machine's core count.
+    The forkserver may have imported torch (one thread per core) before the worker starts, so
+    the variables alone do not suffice. One thread also keeps the network's numerics
+    independent of the machine's core count.
     """
-    os.environ["OMP_NUM_THREADS"] = "1"
     import torch
 
     torch.set_num_threads(1)
@@ -212,8 +236,9 @@ def _run_parallel(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink, n: int
         ctx.Process(target=_worker_main, args=(cfg, task_q, result_q), daemon=True)
         for _ in range(n)
     ]
-    for p in procs:
-        p.start()
+    with single_threaded_children():
+        for p in procs:
+            p.start()
     try:
         _collect(procs, result_q, len(tasks), sink)
         for p in procs:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import zipfile
 from pathlib import Path
 
@@ -211,21 +212,26 @@ def test_param_selects_a_declared_secondary_parameter(tmp_path):
     env.close()
 
 
-def _torch_threads_in_worker(queue) -> None:  # module level: picklable for the worker
-    from impact_eval.sweep import single_threaded_torch
+def _threads_in_worker(queue) -> None:  # module level: picklable for the worker
+    from impact_eval.sweep import THREAD_ENV, single_threaded_torch
 
     single_threaded_torch()
     import torch
 
-    queue.put(torch.get_num_threads())
+    queue.put((torch.get_num_threads(), [os.environ.get(k) for k in THREAD_ENV]))
 
 
-def test_sweep_workers_run_torch_single_threaded() -> None:
-    from impact_eval.sweep import _context
+def test_sweep_workers_are_single_threaded() -> None:
+    from impact_eval.sweep import THREAD_ENV, _context, single_threaded_children
 
+    before = {k: os.environ.get(k) for k in THREAD_ENV}
     ctx = _context()
     queue = ctx.Queue()
-    proc = ctx.Process(target=_torch_threads_in_worker, args=(queue,))
-    proc.start()
-    assert queue.get(timeout=60) == 1
+    proc = ctx.Process(target=_threads_in_worker, args=(queue,))
+    with single_threaded_children():
+        proc.start()
+    torch_threads, env = queue.get(timeout=60)
     proc.join(timeout=10)
+    assert torch_threads == 1
+    assert env == ["1"] * len(THREAD_ENV)  # OpenMP, OpenBLAS, MKL: read when they load
+    assert {k: os.environ.get(k) for k in THREAD_ENV} == before  # parent's env restored
