@@ -10,7 +10,12 @@ import pytest
 import impact_envs  # noqa: F401  (registers the envs)
 from impact_envs.policies.protocol import stack_obs
 from impact_envs.policies.scripted import make_expert
-from impact_envs.tasks.calligraphy import FORCE_DESIRED_N, PAPER_TOP_M, PEN_TIP_OFFSET_M
+from impact_envs.tasks.calligraphy import (
+    FORCE_DESIRED_N,
+    PAPER_TOP_M,
+    PEN_TIP_OFFSET_M,
+    missed_criteria,
+)
 from impact_envs.tasks.calligraphy_force import NormalForceCommand
 from impact_envs.tasks.calligraphy_strokes import (
     CHARACTERS,
@@ -142,8 +147,19 @@ def test_calligraphy_impact_presses_with_commanded_force_despite_1kg_tool():
     info, forces = _write("impact", 1.0, seed=11)
     assert abs(np.median(forces) - FORCE_DESIRED_N) < 2.5
     assert info["in_band_frac"] >= 0.9 and not info["contact_lost"] and info["is_success"]
-    _, forces_imp = _write("impedance", 1.0, seed=11)
+    assert info["failure_reason"] == ""
+    info_imp, forces_imp = _write("impedance", 1.0, seed=11)
     assert abs(np.median(forces_imp) - (FORCE_DESIRED_N + 1.0 * GRAVITY)) < 3.0
+    assert not info_imp["is_success"] and info_imp["failure_reason"].startswith("force in band")
+
+
+def test_calligraphy_missed_criteria_names_each_failed_criterion():
+    ok = {"stroke_rms_m": 0.004, "in_band_frac": 0.95, "contact_lost": False}
+    assert missed_criteria(ok) == ""
+    bad = {"stroke_rms_m": 0.0061, "in_band_frac": 0.78, "contact_lost": True}
+    assert missed_criteria(bad) == (
+        "force in band 78% < 90%; stroke rms 6.1 mm > 5 mm; contact lost"
+    )
 
 
 @pytest.mark.parametrize("controller", ["impact", "impedance"])

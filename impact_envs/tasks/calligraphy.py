@@ -40,6 +40,22 @@ FORCE_BAND_N = (7.5, 22.5)
 """A writing sample is "in band" when the tip's normal force lies in this range [N]."""
 IN_BAND_MIN_FRAC = 0.9
 STROKE_RMS_TOL_M = 0.005
+
+
+def missed_criteria(summary: dict[str, float | bool]) -> str:
+    """The success criteria a finished writing misses ("" if none), e.g. for ``failure_reason``.
+
+    ``summary``: ``StrokeMetrics.summary()`` (stroke RMS [m], in-band fraction, contact lost).
+    """
+    missed = []
+    if summary["in_band_frac"] < IN_BAND_MIN_FRAC:
+        missed.append(f"force in band {summary['in_band_frac']:.0%} < {IN_BAND_MIN_FRAC:.0%}")
+    if summary["stroke_rms_m"] > STROKE_RMS_TOL_M:
+        missed.append(f"stroke rms {1e3 * summary['stroke_rms_m']:.1f} mm > "
+                      f"{1e3 * STROKE_RMS_TOL_M:.0f} mm")
+    if summary["contact_lost"]:
+        missed.append("contact lost")
+    return "; ".join(missed)
 """Tolerance on the RMS distance of the written trace from the intended strokes [m]."""
 CONTACT_MIN_N = 0.2
 """Below this normal force the pen is off the paper [N]."""
@@ -183,12 +199,12 @@ class CalligraphyTask(Task):
     def is_success(self, sim: FrankaSim) -> bool:
         if sim.data.time < self.reference.t_end_s or self.metrics.n == 0:
             return False
-        m = self.metrics.summary()
-        return bool(m["stroke_rms_m"] <= STROKE_RMS_TOL_M and not m["contact_lost"]
-                    and m["in_band_frac"] >= IN_BAND_MIN_FRAC)
+        return not missed_criteria(self.metrics.summary())
 
     def info(self, sim: FrankaSim) -> dict[str, float | bool | str]:
         force = self._force_n if self._stroke >= 0 else self.tip_force_n(sim)
+        done = sim.data.time >= self.reference.t_end_s
+        summary = self.metrics.summary()
         return {
             "object_mass": float(self.tool_mass),
             "normal_force_n": float(force),
@@ -196,8 +212,9 @@ class CalligraphyTask(Task):
             "pressing": self.press.engaged,
             "writing": self._stroke >= 0,
             "character": self.char_names[self.char_index],
-            "writing_done": bool(sim.data.time >= self.reference.t_end_s),
-            **self.metrics.summary(),
+            "writing_done": bool(done),
+            "failure_reason": missed_criteria(summary) if done else "",
+            **summary,
         }
 
     def make_expert(self, load_compensation: bool = False) -> Policy:
