@@ -75,6 +75,12 @@ def sweep_parser() -> argparse.ArgumentParser:
         "start:stop:step (stop included when on the grid) or a comma list",
     )
     grid.add_argument("--param-values", dest="grid", metavar="GRID", help="same as --masses")
+    _add_run_options(p)
+    return p
+
+
+def _add_run_options(p: argparse.ArgumentParser) -> None:
+    """Sweep options beyond what to run: parameter, counts, output, parallelism, seed, ablation."""
     p.add_argument(
         "--param",
         default=None,
@@ -109,7 +115,6 @@ def sweep_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="continue OUT: skip (method, value, episode) rows already written",
     )
-    return p
 
 
 def report_parser() -> argparse.ArgumentParser:
