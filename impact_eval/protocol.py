@@ -20,11 +20,18 @@ lateral tracking lag of a moving impedance target does not count as load error):
   closed-loop time constants, a few 0.1 s) is excluded, an uncompensated load (which stays) is
   not.
 - ``steady_err_z_m``: median ``|e_z|`` over the last third of the time aloft.
+
+``--repeats N`` runs the whole A/B/C sequence N times with base seeds ``seed + 100 k`` (the
+episodes of a sequence use ``base + episode``), so one seed's luck (where the arm happens to
+stop inside the joint-friction dead-band) is not taken for the controller's behaviour.
+``metrics.csv`` holds one row per repeat, controller and phase; ``summary.csv`` the median,
+minimum and maximum over the repeats; ``timeseries.csv`` and the figure show the first repeat.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -41,6 +48,8 @@ PHASES = ("A", "B", "C")
 MAX_TARGET_VZ_M_S = 0.02
 """Samples count only while the target is vertically (nearly) still: a target moving at v
 lags by about D v / K under impedance (2.5 cm at 0.25 m/s), which is not load error."""
+REPEAT_SEED_STRIDE = 100
+"""Base seed of repeat k: ``seed + REPEAT_SEED_STRIDE * k``."""
 SETTLE_S = 1.0
 """Settling time after the last vertical target motion for ``peak_err_z_settled_m`` [s]."""
 AXES = ("fx", "fy", "fz", "tx", "ty", "tz")
@@ -122,6 +131,26 @@ def phase_metrics(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def summarize(metrics: pd.DataFrame) -> pd.DataFrame:
+    """Median, minimum and maximum of each metric over the repeats, per controller and phase.
+
+    ``adapt_time_s`` counts the repeats that never adapted (NaN) in ``never``; its statistics
+    are over the repeats that did.
+    """
+    cols = ["adapt_time_s", "peak_err_z_m", "peak_err_z_settled_m", "steady_err_z_m"]
+    rows = []
+    for (controller, phase), g in metrics.groupby(["controller", "phase"], sort=False):
+        row = {"controller": controller, "phase": phase, "repeats": len(g),
+               "successes": int(g["success"].sum()),
+               "adapt_never": int(g["adapt_time_s"].isna().sum())}
+        for col in cols:
+            v = g[col].dropna()
+            for stat, fn in (("median", np.median), ("min", np.min), ("max", np.max)):
+                row[f"{col}_{stat}"] = float(fn(v)) if len(v) else np.nan
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def plot(df: pd.DataFrame, path: Path) -> list[Path]:
     """Stacked panels per controller: vertical force signals, gate, vertical pose error."""
     import matplotlib
@@ -173,25 +202,38 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--env", default="IMPACT/Dumbbell-v0")
     parser.add_argument("--masses", default="2.5,2.5,5", help="one mass per episode [kg]")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--repeats", type=int, default=1,
+                        help=f"sequences, base seeds seed + {REPEAT_SEED_STRIDE} k")
     parser.add_argument("--out", type=Path, default=Path("results/protocol"))
     args = parser.parse_args(argv)
     try:
         check_choice("env", args.env, impact_envs.ENV_IDS)
         masses = tuple(float(m) for m in args.masses.split(","))
+        if args.repeats < 1:
+            raise ValueError(f"--repeats must be >= 1, got {args.repeats}")
         args.out.mkdir(parents=True, exist_ok=True)
     except (ImpactError, ValueError, OSError) as exc:
-        print(f"impact-protocol: error: {exc}", file=__import__("sys").stderr)
+        print(f"impact-protocol: error: {exc}", file=sys.stderr)
         return 2
     t0 = time.perf_counter()
-    df = pd.concat([run_sequence(args.env, c, masses, args.seed)
-                    for c in ("impact", "impedance")], ignore_index=True)
-    df.to_csv(args.out / "timeseries.csv", index=False)
-    metrics = phase_metrics(df)
-    metrics.to_csv(args.out / "metrics.csv", index=False)
-    figs = plot(df, args.out / "protocol")
-    print(metrics.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
+    metrics = []
+    for k in range(args.repeats):
+        seed = args.seed + REPEAT_SEED_STRIDE * k
+        df = pd.concat([run_sequence(args.env, c, masses, seed)
+                        for c in ("impact", "impedance")], ignore_index=True)
+        if k == 0:
+            df.to_csv(args.out / "timeseries.csv", index=False)
+            figs = plot(df, args.out / "protocol")
+        metrics.append(phase_metrics(df).assign(repeat=k, seed=seed))
+    table = pd.concat(metrics, ignore_index=True)
+    table.to_csv(args.out / "metrics.csv", index=False)
+    summary = summarize(table)
+    summary.to_csv(args.out / "summary.csv", index=False)
+    fmt = {"float_format": lambda v: f"{v:.3f}", "index": False}
+    print((table if args.repeats == 1 else summary).to_string(**fmt))
     print(f"impact-protocol: {time.perf_counter() - t0:.0f} s wall; wrote "
-          f"{args.out / 'timeseries.csv'}, {args.out / 'metrics.csv'}, {figs[0]}")
+          f"{args.out / 'timeseries.csv'}, {args.out / 'metrics.csv'}, "
+          f"{args.out / 'summary.csv'}, {figs[0]}")
     return 0
 
 

@@ -92,6 +92,27 @@ def test_commanded_wrench_is_added_in_both_modes() -> None:
         np.testing.assert_allclose(again, base, atol=1e-9)
 
 
+def test_masked_axis_holds_its_last_unmasked_feedforward() -> None:
+    """A commanded contact on a masked axis changes the model's inputs, not its feedforward."""
+    dyn, ctrl, q0 = _make("impact")
+    _constant_model(ctrl, W_CONST)
+    _tick(ctrl, dyn, q0)
+    np.testing.assert_allclose(ctrl.signals.wrench_ff_world, W_CONST, atol=1e-5)
+    press_mask = np.array([True, True, False, True, True, True])
+    w_new = W_CONST + np.array([3.0, 0.0, -20.0, 0.0, 0.5, 0.0])
+    _constant_model(ctrl, w_new)  # the prediction moves on every axis
+    base = _tick(ctrl, dyn, q0, learn_mask=press_mask)
+    ff = ctrl.signals.wrench_ff_world
+    np.testing.assert_allclose(ctrl.signals.wrench_pred_world, w_new, atol=1e-5)
+    assert ff[2] == pytest.approx(W_CONST[2], abs=1e-5)  # masked: held
+    np.testing.assert_allclose(ff[[0, 1, 3, 4, 5]], w_new[[0, 1, 3, 4, 5]], atol=1e-5)
+    # the held value is what reaches the torques: J^T (w_imp + w_ff) + g at rest
+    expected = dyn.jacobian.T @ (ctrl.signals.wrench_imp_world + ff) + dyn.gravity
+    np.testing.assert_allclose(base, expected, atol=1e-9)
+    _tick(ctrl, dyn, q0)  # unmasked again: the prediction applies at once
+    np.testing.assert_allclose(ctrl.signals.wrench_ff_world, w_new, atol=1e-5)
+
+
 def test_rate_limit_active_on_step_target() -> None:
     dyn, ctrl, q0 = _make("impact", limits=LimitsConfig())
     _constant_model(ctrl, np.zeros(6))

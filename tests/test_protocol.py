@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from impact_eval.protocol import SETTLE_S, phase_metrics
+from impact_eval.protocol import SETTLE_S, main, phase_metrics, summarize
 
 
 def _episode(controller: str, episode: int, sag_m: float) -> pd.DataFrame:
@@ -37,3 +37,22 @@ def test_settled_peak_excludes_lift_lag_but_keeps_a_load_sag():
     assert rows.loc["impact", "peak_err_z_settled_m"] == pytest.approx(0.002, abs=1e-4)
     assert rows.loc["impedance", "peak_err_z_settled_m"] == pytest.approx(0.06, abs=1e-4)
     assert rows.loc["impact", "steady_err_z_m"] == pytest.approx(0.002, abs=1e-4)
+
+
+def test_summary_over_repeats_counts_never_adapted_and_takes_median():
+    metrics = pd.DataFrame({
+        "controller": ["impact"] * 3, "phase": ["B"] * 3, "success": [True, True, False],
+        "adapt_time_s": [1.0, np.nan, 3.0], "peak_err_z_m": [0.05, 0.06, 0.07],
+        "peak_err_z_settled_m": [0.008, 0.012, 0.009], "steady_err_z_m": [0.01, 0.02, 0.03],
+    })
+    row = summarize(metrics).iloc[0]
+    assert (row["repeats"], row["successes"], row["adapt_never"]) == (3, 2, 1)
+    assert row["adapt_time_s_median"] == pytest.approx(2.0)  # over the two that adapted
+    assert row["peak_err_z_settled_m_median"] == pytest.approx(0.009)
+    assert row["peak_err_z_settled_m_max"] == pytest.approx(0.012)
+
+
+def test_bad_repeats_is_a_one_line_error(tmp_path, capsys):
+    assert main(["--repeats", "0", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "--repeats must be >= 1" in err

@@ -91,22 +91,20 @@ def test_reference_writes_each_stroke_at_constant_speed_on_the_paper():
     assert ref.at(ref.t_end_s + 1.0)[1] == -1
 
 
-def test_normal_force_command_ramps_and_holds_free_air_feedforward():
-    ff = np.zeros(6)
+def test_normal_force_command_ramps_and_masks_the_normal_axis():
     cmd = NormalForceCommand(15.0, ramp_n_per_s=60.0)
-    cmd.ff_source = lambda: ff
-    ff[2] = 9.0
-    cmd.tick(tip_height_m=0.02, dt_s=0.001)  # free air: the tool weight is remembered
-    ff[2] = 3.0  # pressing changes the model's features and so its prediction
+    cmd.tick(dt_s=0.001)  # not engaged: nothing
+    assert cmd.level_n == 0.0
     wrench, mask = cmd.engage()
     assert not mask[2] and mask[[0, 1, 3, 4, 5]].all()
     for _ in range(100):
-        cmd.tick(tip_height_m=0.0, dt_s=0.001)
+        cmd.tick(dt_s=0.001)
     assert cmd.level_n == pytest.approx(6.0)
-    assert wrench[2] + ff[2] == pytest.approx(9.0 - 6.0)  # applied ff + cmd = held ff − F(t)
+    assert wrench[2] == pytest.approx(-6.0) and not wrench[[0, 1, 3, 4, 5]].any()
     for _ in range(1000):
-        cmd.tick(tip_height_m=0.0, dt_s=0.001)
-    assert wrench[2] + ff[2] == pytest.approx(9.0 - 15.0)
+        cmd.tick(dt_s=0.001)
+    assert wrench[2] == pytest.approx(-15.0)
+    assert cmd.engage()[0] is wrench and wrench[2] == pytest.approx(-15.0)  # idempotent
     cmd.release()
     assert not wrench.any()
 

@@ -50,7 +50,8 @@ class ControllerSignals:
         wrench_slow_world: Slow wrench w_slow (6,).
         wrench_pred_world: Internal model prediction w_pred (6,) (0 in mode "impedance",
             which skips the internal model).
-        wrench_ff_world: Applied feedforward (w_pred in "impact", 0 in "impedance") (6,).
+        wrench_ff_world: Applied feedforward (6,): w_pred in "impact" (on an axis masked by
+            ``learn_mask``: held at its last unmasked value), 0 in "impedance".
         wrench_cmd_world: Explicit commanded wrench applied this tick (6,).
         slow_wrench_rate: Dimensionless slow-wrench rate (see SlowWrenchFilter).
         surprise_n: Force surprise |w_pred - w_slow| on unmasked axes [N].
@@ -147,7 +148,6 @@ class ImpactController:
             wrench_ext_world=self.estimator.wrench_world,
             wrench_slow_world=self.slow_filter.wrench_slow_world,
             wrench_pred_world=w_pred,
-            wrench_ff_world=w_pred if mode == "impact" else _zeros(6),
             tau_cmd=self.limiter.output,
         )
         self._init_buffers()
@@ -158,9 +158,9 @@ class ImpactController:
         cfg = self.config
         lam, lam_n = cfg.estimator.regularization, cfg.impedance.nullspace_pinv_damping
         self.buffer = np.zeros(kernels.CONTROLLER_SIZE)
-        par, self.signals.wrench_cmd_world, _, self._scalars = kernels.controller_views(
-            self.buffer
-        )
+        views = kernels.controller_views(self.buffer)
+        par, self.signals.wrench_cmd_world, _, self._scalars = views[:4]
+        self.signals.wrench_ff_world = views[4]
         run_model = self.mode == "impact"
         par[:] = (lam * lam, lam_n * lam_n, float(lam_n == lam), self.estimator.kernel_kind,
                   float(run_model), float(run_model))
@@ -216,7 +216,8 @@ class ImpactController:
             quat_target_world: Desired TCP orientation (w, x, y, z).
             wrench_cmd_world: Optional explicit wrench the robot should apply to the
                 environment (6,) [N, Nm], added as J^T w_cmd (hybrid force control).
-            learn_mask: Optional 6 bools; False freezes internal-model learning on that axis.
+            learn_mask: Optional 6 bools; False freezes internal-model learning on that axis
+                and holds its feedforward at the value of the last tick it was unmasked.
             gripper_width_m: Finger opening [m] (0 ... 0.08), an internal-model feature.
 
         Returns:

@@ -177,23 +177,25 @@ def model32_views(buf32, n_features):
     return offset, inv_scale, hist
 
 
-CONTROLLER_SIZE = 24
+CONTROLLER_SIZE = 30
 """Length of ImpactController's own buffer."""
 
 
 @njit(cache=True)
 def controller_views(buf):
-    """(par, wrench_cmd signal, w_ff + w_cmd, scalars) of the controller buffer.
+    """(par, wrench_cmd signal, w_ff + w_cmd, scalars, applied w_ff) of the controller buffer.
 
     par = [lambda^2, lambda_n^2, maps shared, estimator kind (0 residual, 1 momentum),
     run internal model, apply feedforward]; scalars = [|e_p|, |e_R|, slow rate, surprise,
-    gate open, learning active].
+    gate open, learning active]; w_ff = the feedforward applied this tick (the prediction on
+    unmasked axes, the last unmasked tick's value on masked ones).
     """
     par, o = _next(buf, 0, 6)
     w_cmd, o = _next(buf, o, 6)
     w_extra, o = _next(buf, o, 6)
     scalars, o = _next(buf, o, 6)
-    return par, w_cmd, w_extra, scalars
+    w_ff, o = _next(buf, o, 6)
+    return par, w_cmd, w_extra, scalars, w_ff
 
 
 # ------------------------------------------------------------------------------ linear algebra
@@ -598,7 +600,7 @@ def controller_tick(
     (2, 6, 7) hold the estimator's and the null-space projector's solves (one when shared).
     Without "run internal model" (mode "impedance") the model is skipped entirely.
     """
-    par, sig_cmd, w_extra, scalars = controller_views(ctl)
+    par, sig_cmd, w_extra, scalars, w_ff = controller_views(ctl)
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
     regularized_wrench_map(dyn[0], par[0], grams[0], wrench_maps[0])
@@ -618,7 +620,13 @@ def controller_tick(
         flags = model_gate_step(slow_filter_views(sf)[4], slow_rate, mask, model)
     for i in range(6):
         sig_cmd[i] = wrench_cmd[i]
-        w_extra[i] = (pred[i] if par[5] != 0.0 else 0.0) + wrench_cmd[i]
+        if par[5] == 0.0:
+            w_ff[i] = 0.0
+        elif mask[i] != 0.0:
+            w_ff[i] = pred[i]
+        # else: a masked axis keeps the feedforward of its last unmasked tick (its prediction
+        # follows input features that the commanded contact changes: positive feedback)
+        w_extra[i] = w_ff[i] + wrench_cmd[i]
     wrench_map_null = wrench_maps[0] if par[2] != 0.0 else wrench_maps[1]
     impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, w_extra, imp)
     views = impedance_views(imp)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from impact_envs.envs.base import ImpactEnv
 from impact_envs.tasks.calligraphy import CalligraphyTask
 
@@ -73,7 +71,3 @@ class CalligraphyEnv(ImpactEnv):
     @classmethod
     def make_task(cls) -> CalligraphyTask:
         return CalligraphyTask()
-
-    def __init__(self, **kwargs: Any) -> None:
-        super().__init__(**kwargs)
-        self.task.set_feedforward_source(lambda: self.controller.signals.wrench_ff_world)

@@ -9,8 +9,6 @@ writing, but never the commanded pressing force (``calligraphy_force.py``).
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import mujoco
 import numpy as np
 
@@ -102,11 +100,6 @@ class CalligraphyTask(Task):
         self.metrics = WritingMetrics(FORCE_BAND_N, CONTACT_MIN_N, CONTACT_GAP_MAX_S)
         self.char_index, self._tick, self._stroke, self._force_n = 0, 0, -1, 0.0
 
-    def set_feedforward_source(self, source: Callable[[], np.ndarray]) -> None:
-        """Read access to the controller's applied feedforward ``w_ff`` (6,) [N, Nm] (the env
-        passes ``ControllerSignals.wrench_ff_world``) for the normal-feedforward hold."""
-        self.press.ff_source = source
-
     def apply_params(self, sim: FrankaSim, values: dict[str, float]) -> None:
         self.tool_mass = values["tool_mass"]
         self.mass.set(sim.model, values["tool_mass"])
@@ -158,7 +151,7 @@ class CalligraphyTask(Task):
     def before_tick(self, sim: FrankaSim, time_s: float) -> None:
         """Every tick: update the pressing command; at 100 Hz: sample the writing metrics."""
         tip = sim.data.site_xpos[self.tip_site]
-        self.press.tick(tip[2] - PAPER_TOP_M, sim.dt)
+        self.press.tick(sim.dt)
         self._tick += 1
         if self._tick % SAMPLE_TICKS:
             return
@@ -172,7 +165,7 @@ class CalligraphyTask(Task):
 
     def control_inputs(self, sim: FrankaSim, action: np.ndarray
                        ) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """Press (ramped, normal feedforward held) and freeze normal-axis learning.
+        """Press (ramped) and freeze normal-axis learning (the controller holds its feedforward).
 
         On when the commanded tip (action pose + pen offset) is on the paper and the actual
         tip is within ``TIP_NEAR_SURFACE_M`` of it; otherwise pure pose tracking.
