@@ -56,3 +56,21 @@ def test_bad_repeats_is_a_one_line_error(tmp_path, capsys):
     assert main(["--repeats", "0", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "--repeats must be >= 1" in err
+
+
+def test_adapt_time_ignores_lag_behind_a_descending_target():
+    """A sag that decays below 1 cm adapts; the lag after the place descent does not undo it."""
+    ep = _episode("impact", 1, 0.0)
+    t = ep["t_episode_s"].to_numpy()
+    sag = 0.05 * np.exp(-(t - 1.5) / 0.5)  # load error decaying after the lift
+    err = ep["err_z_m"].to_numpy() + np.where(t >= 1.2, sag, 0.0)
+    # at 4 s the target descends 5 cm in 0.2 s (object still aloft), the arm lags behind it
+    descent = (t >= 4.0) & (t < 4.2)
+    ep["target_z_m"] = ep["target_z_m"] - np.clip((t - 4.0) / 0.2, 0.0, 1.0) * 0.05
+    lag = np.where(t >= 4.2, 0.04 * np.exp(-(t - 4.2) / 0.15), 0.0)
+    err = err + np.where(descent, 0.04, 0.0) + lag
+    ep["err_z_m"] = err
+    row = phase_metrics(ep).iloc[0]
+    # settled samples start 1 s after the lift (2.5 s); sag < 1 cm from 1.5 + 0.5 ln 5 = 2.3 s
+    assert row["adapt_time_s"] == pytest.approx(2.5 - 1.0, abs=0.04)
+    assert row["peak_err_z_m"] > 0.02  # the raw aloft peak still sees the descent lag

@@ -46,6 +46,10 @@ class PickPlaceSpec:
             grasp_z - lift_margin_m``.
         stiffness_z_n_per_m: impedance stiffness used for the privileged load compensation.
         timeouts_steps: per-phase timeouts at 30 Hz.
+        carry_dwell_steps: with > 0, the carry ends only after the target has rested this many
+            steps at the carry waypoint above the goal (the carry timeout grows by as much):
+            the object is held still aloft, e.g. to watch the internal model adapt
+            (``impact-protocol --hold-s``). 0: the carry ends once the TCP reaches it.
     """
 
     grasp_offset_obj: tuple[float, float, float]
@@ -59,6 +63,11 @@ class PickPlaceSpec:
     lift_margin_m: float = 0.04
     stiffness_z_n_per_m: float = 400.0
     timeouts_steps: tuple[int, ...] = (90, 60, 18, 450, 150, 120, 15, 10_000)
+    carry_dwell_steps: int = 0
+
+    def timeout_steps(self, phase: int) -> int:
+        """Timeout of ``phase`` [policy steps] (the carry's includes the dwell)."""
+        return self.timeouts_steps[phase] + (self.carry_dwell_steps if phase == CARRY else 0)
 
 
 def _yaw_frame(direction: np.ndarray) -> np.ndarray:
@@ -101,6 +110,7 @@ class PickPlaceExpert:
         self.rot = [None] * self.n
         self.grip = np.full(self.n, OPEN)
         self.obj_z0 = np.zeros(self.n)
+        self.dwell = np.zeros(self.n, dtype=int)
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Actions (B, 10): TCP target position, rot6d, gripper."""
@@ -143,6 +153,10 @@ class PickPlaceExpert:
             return o["object_pos"][2] - self.obj_z0[i] > s.carry_z - s.grasp_z - s.lift_margin_m
         if phase == RELEASE:
             return self.phase_steps[i] >= s.timeouts_steps[RELEASE]
+        if phase == CARRY and s.carry_dwell_steps > 0:
+            at_waypoint = np.linalg.norm(self.target[i] - waypoint) < 1e-6
+            self.dwell[i] = self.dwell[i] + 1 if at_waypoint else 0
+            return bool(self.dwell[i] >= s.carry_dwell_steps)
         return bool(reached)
 
     def _act_one(self, i: int, o: dict[str, np.ndarray]) -> np.ndarray:
@@ -157,7 +171,7 @@ class PickPlaceExpert:
         self.target[i] = waypoint.copy() if dist <= step else self.target[i] + delta * step / dist
         self.rot[i] = rot
         self.phase_steps[i] += 1
-        timeout = self.phase_steps[i] >= s.timeouts_steps[self.phase[i]]
+        timeout = self.phase_steps[i] >= s.timeout_steps(self.phase[i])
         if self.phase[i] < RETREAT and (self._phase_done(i, o, waypoint) or timeout):
             self._advance(i, o)
         return self._emit(i)

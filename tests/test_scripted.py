@@ -1,0 +1,55 @@
+"""Pick-and-place expert: the optional carry dwell (``PickPlaceSpec.carry_dwell_steps``)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from impact_envs.errors import InvalidArgumentError
+from impact_envs.policies.scripted import CARRY, LOWER, make_expert
+from impact_eval.protocol import protocol_expert
+
+
+def _carry_obs(goal: np.ndarray, carry_z: float) -> dict[str, np.ndarray]:
+    """One env's observation with the TCP and the object already at the carry waypoint."""
+    ee = np.array([goal[0], goal[1], carry_z])
+    rot6d = np.array([1.0, 0.0, 0.0, 0.0, -1.0, 0.0])
+    return {"ee_pos": ee[None], "ee_rot6d": rot6d[None], "gripper_width": np.array([[0.03]]),
+            "object_pos": (ee - [0, 0, 0.05])[None], "object_rot6d": rot6d[None],
+            "goal_pos": goal[None]}
+
+
+@pytest.mark.parametrize("dwell", [0, 7])
+def test_carry_ends_after_the_dwell_at_the_waypoint(dwell):
+    expert = make_expert("IMPACT/Dumbbell-v0")
+    expert.spec = replace(expert.spec, carry_dwell_steps=dwell)
+    expert.reset(1)
+    goal = np.array([0.35, -0.17, 0.0])
+    obs = _carry_obs(goal, expert.spec.carry_z)
+    expert.phase[0] = CARRY
+    expert.target[0] = obs["ee_pos"][0].copy()  # target already on the waypoint
+    expert.rot[0] = np.diag([1.0, -1.0, -1.0])
+    steps = 0
+    while expert.phase[0] == CARRY:
+        action = expert.act(obs)
+        np.testing.assert_allclose(action[0, :3], obs["ee_pos"][0])  # holds still
+        steps += 1
+        assert steps < 100
+    assert expert.phase[0] == LOWER
+    assert steps == max(dwell, 1)  # no dwell: the first step that sees the TCP there
+
+
+def test_dwell_extends_the_carry_timeout():
+    spec = replace(make_expert("IMPACT/Dumbbell-v0").spec, carry_dwell_steps=90)
+    assert spec.timeout_steps(CARRY) == spec.timeouts_steps[CARRY] + 90
+    assert spec.timeout_steps(LOWER) == spec.timeouts_steps[LOWER]
+
+
+def test_protocol_expert_validates_env_and_hold():
+    assert protocol_expert("IMPACT/Hammer-v0", 2.0).spec.carry_dwell_steps == 60
+    with pytest.raises(InvalidArgumentError, match="valid: IMPACT/Dumbbell-v0"):
+        protocol_expert("IMPACT/Disturbance-v0", 1.0)
+    with pytest.raises(InvalidArgumentError, match="--hold-s must be >= 0"):
+        protocol_expert("IMPACT/Dumbbell-v0", -1.0)
