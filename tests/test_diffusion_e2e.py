@@ -129,8 +129,27 @@ def test_collect_cli(tmp_path, monkeypatch, capsys):
     attrs = load_replay(out).attrs
     assert attrs["expert"]["load_compensation"] is True
     assert attrs["param_spec"] == {"mode": "fixed", "values": [0.2]}
-    with pytest.raises(Exception, match="--resume"):
+    with pytest.raises(SystemExit) as exc:
         collect_module.main([*argv, "--no-progress"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--resume" in err
+
+
+@pytest.mark.parametrize("extra, needle", [
+    (["--env", "Foo/Bar-v0"], "valid: IMPACT/Hammer-v0"),
+    (["--env", "IMPACT/Hammer-v0", "--controller", "pid"], "valid choices: impedance, impact"),
+    (["--env", "IMPACT/Hammer-v0", "--mass-range", "3"], "LO:HI"),
+    (["--env", "IMPACT/Calligraphy-v0", "--load-compensation"], "load_compensation=False"),
+    (["--env", "IMPACT/Disturbance-v0", "--load-compensation"], "load_compensation=False"),
+])
+def test_collect_cli_bad_input_is_one_line(tmp_path, capsys, extra, needle):
+    with pytest.raises(SystemExit) as exc:
+        collect_module.main([*extra, "--out", str(tmp_path / "x.zarr"), "--episodes", "1",
+                             "--no-progress"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("impact-collect: error:") and err.count("\n") == 1 and needle in err
 
 
 def test_param_spec_parsing():

@@ -135,3 +135,12 @@ def test_cli(data_path, tmp_path, capsys):
     saved = DiffusionConfig.from_json(out / "config.json")
     assert saved.batch_size == 4 and saved.down_dims == CFG.down_dims
     assert len(_rows(out)) == 2
+
+
+def test_train_cli_bad_input_is_one_line(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        train_module.main(["--data", str(tmp_path / "missing.zarr"), "--out",
+                           str(tmp_path / "run"), "--steps", "2", "--no-progress"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("impact-train: error: dataset") and err.count("\n") == 1

@@ -65,7 +65,9 @@ class CalligraphyEnv(ImpactEnv):
     ``camera``, ``controller_config`` (as for ``IMPACT/Hammer-v0``).
 
     ## Version history
-    - v0: initial release.
+    - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
+      the normal-axis feedforward hold moved from the task into the controller (held from
+      the last unmasked tick instead of the last tick the tip was > 5 mm above the paper).
     """
 
     @classmethod

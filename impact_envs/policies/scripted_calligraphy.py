@@ -11,8 +11,9 @@ While writing (the reference is on the paper) it corrects the tangential (x, y) 
 with a PI law on the observed pen tip, as a writer steers the pen against paper drag and
 joint friction; the normal direction is never corrected (no force sensing in observations).
 
-With ``load_compensation`` it knows the tool mass (privileged) and raises every target by
-``m g / K_z``: the overshoot a teleoperator produces under plain impedance (Augmented-DP demos).
+There is no privileged load compensation (``CalligraphyTask.make_expert`` refuses it): raising
+the targets by ``m g / K_z`` lifts the commanded tip off the paper, and the task presses only
+while the commanded tip is on it (docs/envs.md).
 """
 
 from __future__ import annotations
@@ -20,9 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from impact_envs.control.lie import rot6d_from_matrix
-from impact_envs.policies.scripted import expert_masses
 
-GRAVITY = 9.81
 R_DOWN = np.diag([1.0, -1.0, -1.0])
 """TCP pointing down with its x axis along world +x (the home yaw)."""
 
@@ -34,9 +33,7 @@ class CalligraphyExpert:
         tip_offset_m: pen tip distance below the TCP along the TCP z axis [m].
         surface_z: height of the writing surface [m]; the reference is "writing" at or below
             ``surface_z + 1 mm``.
-        load_compensation: raise targets by the tool weight over the z stiffness.
         speed_m_s: maximum target speed [m/s] (the reference itself moves slower).
-        stiffness_z_n_per_m: impedance stiffness used for the load compensation [N/m].
     """
 
     kp = 1.0
@@ -45,19 +42,15 @@ class CalligraphyExpert:
     """Integral gain of the tangential tip correction [1/s]."""
     max_correction_m = 0.03
 
-    def __init__(self, tip_offset_m: float, surface_z: float, load_compensation: bool = False,
-                 speed_m_s: float = 0.25, stiffness_z_n_per_m: float = 400.0) -> None:
+    def __init__(self, tip_offset_m: float, surface_z: float, speed_m_s: float = 0.25) -> None:
         self.tip_offset_m = float(tip_offset_m)
         self.surface_z = float(surface_z)
-        self.load_compensation = bool(load_compensation)
         self.speed_m_s = float(speed_m_s)
-        self.stiffness_z = float(stiffness_z_n_per_m)
-        self.reset(1, np.zeros(1))
+        self.reset(1)
 
     def reset(self, n_envs: int, object_mass_kg: np.ndarray | None = None) -> None:
-        """Start ``n_envs`` episodes; tool masses [kg] are needed only with load compensation."""
+        """Start ``n_envs`` episodes (``object_mass_kg``, the tool masses, is not used)."""
         self.n = int(n_envs)
-        self.mass = expert_masses(self.load_compensation, self.n, object_mass_kg)
         self.target: list[np.ndarray | None] = [None] * self.n
         self.prev_goal = np.full((self.n, 3), np.nan)
         self.integral = np.zeros((self.n, 2))
@@ -78,8 +71,6 @@ class CalligraphyExpert:
             self.target[i] = goal_tcp
             target = self.target[i].copy()
             target[:2] += self._correction(i, obs["goal_pos"][i], obs["object_pos"][i])
-            if self.load_compensation:
-                target[2] += self.mass[i] * GRAVITY / self.stiffness_z
             out[i] = np.concatenate([target, rot6d, [1.0]])
         return out
 

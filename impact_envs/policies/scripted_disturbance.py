@@ -36,7 +36,7 @@ class CarryHoldExpert(PickPlaceExpert):
         return super()._phase_done(i, o, waypoint)
 
 
-def make_carry_hold_expert(grasp_z: float, load_compensation: bool = False) -> CarryHoldExpert:
+def make_carry_hold_expert(grasp_z: float) -> CarryHoldExpert:
     """Expert for an object grasped at its centre of mass at TCP height ``grasp_z`` [m]."""
     spec = PickPlaceSpec(
         grasp_offset_obj=(0.0, 0.0, 0.0),
@@ -46,4 +46,4 @@ def make_carry_hold_expert(grasp_z: float, load_compensation: bool = False) -> C
         place_z=grasp_z,
         timeouts_steps=(90, 60, 18, 450, NEVER, NEVER, NEVER, NEVER),
     )
-    return CarryHoldExpert(spec, load_compensation=load_compensation)
+    return CarryHoldExpert(spec)

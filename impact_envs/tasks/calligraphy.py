@@ -13,6 +13,7 @@ import mujoco
 import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
+from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.protocol import Policy
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
@@ -211,8 +212,17 @@ class CalligraphyTask(Task):
         }
 
     def make_expert(self, load_compensation: bool = False) -> Policy:
-        """The pen-following expert (``policies/scripted_calligraphy.py``)."""
+        """The pen-following expert (``policies/scripted_calligraphy.py``).
+
+        Raises:
+            InvalidArgumentError: ``load_compensation``: raised targets would lift the commanded
+                tip off the paper, and the task presses only while it is on the paper.
+        """
         from impact_envs.policies.scripted_calligraphy import CalligraphyExpert
 
-        return CalligraphyExpert(PEN_TIP_OFFSET_M, PAPER_TOP_M,
-                                 load_compensation=load_compensation)
+        if load_compensation:
+            raise InvalidArgumentError(
+                "IMPACT/Calligraphy-v0 has no load-compensating expert (raised targets lift the "
+                "commanded pen tip off the paper, so the task would never press); valid: "
+                "load_compensation=False")
+        return CalligraphyExpert(PEN_TIP_OFFSET_M, PAPER_TOP_M)

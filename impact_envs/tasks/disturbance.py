@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.protocol import Policy
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
@@ -206,7 +207,18 @@ class DisturbanceTask(Task):
         }
 
     def make_expert(self, load_compensation: bool = False) -> Policy:
-        """Pick, carry to the goal and hold (``policies/scripted_disturbance.py``)."""
+        """Pick, carry to the goal and hold (``policies/scripted_disturbance.py``).
+
+        Raises:
+            InvalidArgumentError: ``load_compensation``: the expert's compensation is m g / K
+                for an object mass, but this env's swept parameter is a disturbance force with
+                a random direction and time profile.
+        """
         from impact_envs.policies.scripted_disturbance import make_carry_hold_expert
 
-        return make_carry_hold_expert(REST_Z_M, load_compensation=load_compensation)
+        if load_compensation:
+            raise InvalidArgumentError(
+                "IMPACT/Disturbance-v0 has no load-compensating expert (its parameter is a "
+                "random, time-varying disturbance force, not a mass); valid: "
+                "load_compensation=False")
+        return make_carry_hold_expert(REST_Z_M)

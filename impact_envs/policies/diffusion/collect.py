@@ -25,6 +25,7 @@ import numpy as np
 from tqdm import tqdm
 
 import impact_envs
+from impact_envs.errors import ImpactError
 from impact_envs.policies.diffusion.collect_config import CollectConfig, parse_param_spec
 from impact_envs.policies.diffusion.collect_run import AttemptSpec, Expert, run_attempts
 from impact_envs.policies.diffusion.dataset import EpisodeMeta, ReplayWriter
@@ -164,10 +165,28 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Entry point of ``impact-collect``."""
-    args = build_parser().parse_args(argv)
+    """Entry point of ``impact-collect``; bad input exits 2 with a one-line message."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        cfg = config_from_args(args)
+        stored = collect(cfg)
+    except gym.error.Error:
+        parser.exit(2, f"impact-collect: error: unknown env {args.env!r}; valid: "
+                       f"{', '.join(impact_envs.ENV_IDS)}\n")
+    except ImpactError as exc:
+        parser.exit(2, f"impact-collect: error: {exc}\n")
+    if stored < cfg.episodes:
+        raise SystemExit(
+            f"only {stored}/{cfg.episodes} successful demos after {cfg.attempt_limit} attempts"
+        )
+    print(f"{stored} demos in {cfg.out}")
+
+
+def config_from_args(args: argparse.Namespace) -> CollectConfig:
+    """``CollectConfig`` of parsed ``impact-collect`` arguments (validated)."""
     param, param_range, param_list = parse_param_spec(args.mass, args.mass_range, args.mass_list)
-    cfg = CollectConfig(
+    return CollectConfig(
         env_id=args.env,
         out=str(Path(args.out)),
         episodes=args.episodes,
@@ -183,12 +202,6 @@ def main(argv: list[str] | None = None) -> None:
         resume=args.resume,
         progress=not args.no_progress,
     )
-    stored = collect(cfg)
-    if stored < cfg.episodes:
-        raise SystemExit(
-            f"only {stored}/{cfg.episodes} successful demos after {cfg.attempt_limit} attempts"
-        )
-    print(f"{stored} demos in {cfg.out}")
 
 
 if __name__ == "__main__":

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import torch
 
-from impact_envs.errors import InvalidArgumentError
+from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.ema import EMA
 from impact_envs.policies.diffusion.model import diffusion_loss, make_network
@@ -183,8 +183,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Entry point of ``impact-train``."""
-    args = build_parser().parse_args(argv)
+    """Entry point of ``impact-train``; bad input exits 2 with a one-line message."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        run_from_args(args)
+    except ImpactError as exc:
+        parser.exit(2, f"impact-train: error: {exc}\n")
+
+
+def run_from_args(args: argparse.Namespace) -> None:
+    """Train as the parsed ``impact-train`` arguments say."""
     if args.threads:
         torch.set_num_threads(args.threads)
     base = DiffusionConfig.from_json(args.config) if args.config else DiffusionConfig()
