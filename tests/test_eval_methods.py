@@ -113,3 +113,34 @@ def test_trace_bad_input_is_one_line_exit_2(argv, capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "error" in err
+
+
+SHIPPED = sorted((p.parent.name, p.name) for p in
+                 (Path(__file__).parents[1] / "impact_envs" / "checkpoints").glob("*/*"))
+
+
+@pytest.mark.parametrize("env_name, variant", SHIPPED)
+def test_shipped_checkpoint_loads_and_acts_in_its_env(env_name: str, variant: str,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every shipped checkpoint loads without pickle and emits in-space actions for its env."""
+    import impact_envs
+    from impact_envs.policies.protocol import stack_obs
+
+    monkeypatch.delenv(CHECKPOINTS_ENV_VAR, raising=False)
+    env_id = next(e for e in impact_envs.ENV_IDS if env_short_name(e) == env_name)
+    method = "vanilla_dp" if variant == "vanilla" else "augmented_dp"
+    env = gym.make(env_id)
+    policy = resolve_method(method).build(env_id, env)
+    obs, _ = env.reset(seed=0)
+    policy.reset(2)
+    actions = policy.act(stack_obs([obs, obs]))
+    assert actions.shape == (2, *env.action_space.shape) and np.all(np.isfinite(actions))
+    assert env.action_space.contains(actions[0].astype(np.float32))
+    env.close()
+
+
+def test_every_env_ships_a_vanilla_checkpoint() -> None:
+    import impact_envs
+
+    assert {env_short_name(e) for e in impact_envs.ENV_IDS} == {
+        name for name, variant in SHIPPED if variant == "vanilla"}

@@ -36,6 +36,8 @@ CONFIG_FILE = "config.json"
 NORMALIZER_FILE = "normalizer.safetensors"
 META_FILE = "meta.json"
 CHECKPOINT_FORMAT = 1
+GRIPPER_DIM = 9
+"""Index of the gripper command (−1 open … +1 closed) in the 10-d action."""
 
 
 def env_generator(seed: int, *keys: int) -> torch.Generator:
@@ -163,6 +165,9 @@ class DiffusionPolicy:
         with torch.inference_mode():
             sample = denoise(self.net, self.scheduler, obs, noise)
         actions = self.normalizer.action.inverse(sample)
+        # clip_sample keeps positions in the demos' range and rot6d in [-1, 1]; a gripper
+        # channel that was constant in the demos can land a little outside [-1, 1]
+        actions[..., GRIPPER_DIM].clamp_(-1.0, 1.0)
         start = cfg.n_obs_steps - 1
         return actions[:, start : start + cfg.n_action_steps].numpy().astype(np.float32)
 
