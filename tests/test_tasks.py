@@ -214,6 +214,29 @@ def test_disturbance_applied_force_and_load_change_follow_the_profile():
     env.close()
 
 
+def test_disturbance_stops_pushing_a_dropped_trough():
+    """A 40 N push acts on the held trough only; dropping it ends the push (no fling)."""
+    env = gym.make("IMPACT/Disturbance-v0", controller="impact").unwrapped
+    obs, _ = env.reset(seed=0, options={"disturbance_n": 40.0})
+    task, sim = env.task, env.sim
+    expert = make_expert("IMPACT/Disturbance-v0")
+    expert.reset(1)
+    for _ in range(400):
+        action = expert.act(stack_obs([obs]))[0]
+        obs, _, _, _, info = env.step(action)
+        if task.t_lift is not None and task.profile.scale(sim.data.time - task.t_lift) > 0:
+            break
+    assert info["is_grasped"] and np.linalg.norm(sim.data.xfrc_applied[task.body, :3]) > 0
+    action[9] = -1.0  # open the hand: the trough falls
+    for _ in range(60):
+        obs, _, terminated, _, info = env.step(action)
+        assert not terminated
+    assert not info["is_grasped"]
+    assert not sim.data.xfrc_applied[task.body].any()
+    assert np.abs(sim.data.qvel).max() < 10.0
+    env.close()
+
+
 @pytest.mark.parametrize(("controller", "magnitude", "success"),
                          [("impact", 2.0, True), ("impedance", 2.0, True),
                           ("impact", 30.0, True), ("impedance", 30.0, False)])

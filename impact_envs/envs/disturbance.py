@@ -63,7 +63,8 @@ class DisturbanceEnv(ImpactEnv):
     ``camera``, ``controller_config`` (as for ``IMPACT/Hammer-v0``).
 
     ## Version history
-    - v0: initial release.
+    - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
+      the disturbance acts only while the trough is held.
     """
 
     @classmethod

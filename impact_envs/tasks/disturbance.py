@@ -1,10 +1,11 @@
 """Disturbance task: carry a trough to a goal in the air and hold it under external forces.
 
-After the trough is lifted, an external force acts on it (MuJoCo ``xfrc_applied`` at its
-centre of mass, every control tick) following a per-episode profile drawn from the episode
-rng: constant, step, or slowly varying. A few seconds after the lift a load is added (the body
-mass jumps by ``added_mass``, written directly without ``mj_setConst``, which would reset the
-state). The robot must bring the trough to the goal and hold it there.
+After the trough is lifted, an external force acts on it while it is held (MuJoCo
+``xfrc_applied`` at its centre of mass, every control tick) following a per-episode profile
+drawn from the episode rng: constant, step, or slowly varying. A few seconds after the lift a
+load is added (the body mass jumps by ``added_mass``, written directly without
+``mj_setConst``, which would reset the state). The robot must bring the trough to the goal and
+hold it there.
 """
 
 from __future__ import annotations
@@ -153,8 +154,11 @@ class DisturbanceTask(Task):
             if d.xipos[self.body, 2] < REST_Z_M + LIFT_DZ_M:
                 return
             self.t_lift = time_s
+            self._update_hold(sim, time_s)
         tau = time_s - self.t_lift
-        self.applied = self.profile.force(tau)
+        # Only a held trough is pushed: the same force on a dropped (or never grasped) 0.3 kg
+        # trough threw it off the table faster than the env's velocity check allows.
+        self.applied = self.profile.force(tau) if self._held else np.zeros(3)
         d.xfrc_applied[self.body, :3] = self.applied
         if self.t_load is None and tau >= self.load_delay:
             self._add_load(sim)
