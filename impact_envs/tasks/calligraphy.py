@@ -60,8 +60,11 @@ CONTACT_MIN_N = 0.2
 """Below this normal force the pen is off the paper [N]."""
 CONTACT_GAP_MAX_S = 0.05
 """A contact gap longer than this during a stroke is a loss of contact [s]."""
-CMD_ON_SURFACE_M = 0.002
-"""The commanded tip counts as "on the paper" up to this height above it [m]."""
+CMD_ON_SURFACE_M = 0.005
+"""Pressing starts when the commanded tip comes within this height of the paper [m]."""
+CMD_OFF_SURFACE_M = 0.01
+"""Pressing stops when the commanded tip rises above this height (hysteresis: a learned
+policy's commanded tip jitters a few mm while writing; strokes are joined 3 cm up) [m]."""
 TIP_NEAR_SURFACE_M = 0.03
 """Guard: no force command unless the actual tip is within this height of the paper [m]."""
 SAMPLE_TICKS = 10
@@ -168,15 +171,16 @@ class CalligraphyTask(Task):
                        ) -> tuple[np.ndarray | None, np.ndarray | None]:
         """Press (ramped) and freeze normal-axis learning (the controller holds its feedforward).
 
-        On when the commanded tip (action pose + pen offset) is on the paper and the actual
-        tip is within ``TIP_NEAR_SURFACE_M`` of it; otherwise pure pose tracking.
+        On when the commanded tip (action pose + pen offset) comes within ``CMD_ON_SURFACE_M``
+        of the paper, and stays on until it rises above ``CMD_OFF_SURFACE_M``; only while the
+        actual tip is within ``TIP_NEAR_SURFACE_M`` of the paper. Otherwise pure pose tracking.
         """
         a = np.asarray(action, dtype=float)
         pos = np.clip(a[:3], self.workspace_low, self.workspace_high)
         cmd_tip_z = (pos + matrix_from_rot6d(a[3:9])[:, 2] * PEN_TIP_OFFSET_M)[2]
         tip_z = sim.data.site_xpos[self.tip_site, 2]
-        if (cmd_tip_z <= PAPER_TOP_M + CMD_ON_SURFACE_M
-                and tip_z <= PAPER_TOP_M + TIP_NEAR_SURFACE_M):
+        on_paper = CMD_OFF_SURFACE_M if self.press.engaged else CMD_ON_SURFACE_M
+        if cmd_tip_z <= PAPER_TOP_M + on_paper and tip_z <= PAPER_TOP_M + TIP_NEAR_SURFACE_M:
             return self.press.engage()
         self.press.release()
         return None, None
