@@ -120,7 +120,11 @@ def test_calligraphy_force_command_follows_the_commanded_tip():
     sim.data.site_xpos[task.tip_site, 2] = PAPER_TOP_M + 0.001
     wrench, mask = task.control_inputs(sim, action)
     assert wrench[2] <= 0.0 and not mask[2]
-    action[2] += 0.01  # target lifted off the paper
+    action[2] += 0.008  # a few mm of jitter while writing: still pressing (hysteresis)
+    assert task.control_inputs(sim, action)[0] is wrench
+    action[2] += 0.004  # 12 mm up: lifted off the paper
+    assert task.control_inputs(sim, action) == (None, None)
+    action[2] -= 0.005  # 7 mm: not yet on the paper again (engages at 5 mm)
     assert task.control_inputs(sim, action) == (None, None)
     env.close()
 
