@@ -67,7 +67,9 @@ class CalligraphyEnv(ImpactEnv):
     ## Version history
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
       the normal-axis feedforward hold moved from the task into the controller (held from
-      the last unmasked tick instead of the last tick the tip was > 5 mm above the paper).
+      the last unmasked tick instead of the last tick the tip was > 5 mm above the paper);
+      pressing engages with the commanded tip within 5 mm of the paper and releases above
+      10 mm (was: on exactly while within 2 mm).
     """
 
     @classmethod
