@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
+from impact_envs import jit_cache as _jit_cache
+
 __version__ = "0.1.0"
 
 ENV_IDS = (
@@ -26,3 +28,5 @@ _ENTRY_POINTS = {
 for _env_id, (_entry, _steps) in _ENTRY_POINTS.items():
     if _env_id not in registry:
         register(id=_env_id, entry_point=_entry, max_episode_steps=_steps)
+
+_jit_cache.ensure_fresh_kernel_cache()

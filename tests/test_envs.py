@@ -30,6 +30,7 @@ def _expert_rollout(env: gym.Env, env_id: str, seed: int, steps: int) -> np.ndar
         obs, _, _, _, info = env.step(expert.act(stack_obs([obs]))[0])
         rows.append(np.concatenate([*(obs[k].ravel() for k in sorted(obs)), info["tau_nm"],
                                     info["wrench_slow_world"], info["wrench_pred_world"],
+                                    info["wrench_ff_world"],
                                     [info["energy_j"]]]))
     env.close()
     return np.array(rows)

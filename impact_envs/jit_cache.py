@@ -1,0 +1,95 @@
+"""Keep numba's on-disk kernel cache consistent with the kernel sources.
+
+Numba's ``cache=True`` keys a compiled function on the timestamp of the file that *defines*
+it. A cached function that calls (and inlines) a kernel from another module is therefore
+loaded stale after only that other module changed: e.g. ``robot/loop.py::fused_tick``, which
+inlines the whole controller tick from ``control/kernels*.py``, kept running an old
+controller after ``kernel_stages.py`` changed (numba documents this under "Cache
+invalidation"). This module stamps each cache directory with a digest of *all* kernel sources
+and deletes the kernel modules' cached functions there when the digest differs, so the next
+call recompiles them. It runs on ``import impact_envs`` (file reads and a hash, ~1 ms; numba
+is not imported).
+
+Covered cache locations: numba's default in-tree ``__pycache__`` next to each source and, when
+``NUMBA_CACHE_DIR`` is set, its mirror of the source directory there. A package installed
+read-only falls back to numba's per-user cache; reinstalling rewrites every source file, which
+invalidates that cache anyway.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+KERNEL_SOURCES = (
+    "control/chain_dynamics.py",
+    "control/kernel_layout.py",
+    "control/kernel_math.py",
+    "control/kernel_stages.py",
+    "control/kernels.py",
+    "robot/loop.py",
+    "robot/sim.py",
+)
+"""Every module (relative to the package) that defines ``@njit`` functions; located without
+importing anything (tests/test_jit_cache.py checks that the list is complete)."""
+
+STAMP_NAME = "impact_kernels.sha256"
+"""File written into each cache directory: the digest its cached kernels were built from."""
+
+
+def kernel_sources() -> list[Path]:
+    """IMPACT's kernel source files."""
+    return [PACKAGE_DIR / rel for rel in KERNEL_SOURCES]
+
+
+def sources_digest(sources: list[Path]) -> str:
+    """SHA-256 over the sources' names and bytes (order-independent)."""
+    h = hashlib.sha256()
+    for path in sorted(sources, key=lambda p: p.name):
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+def cache_dirs(source: Path) -> list[Path]:
+    """Where numba may cache functions defined in ``source``."""
+    dirs = [source.parent / "__pycache__"]
+    user_dir = os.environ.get("NUMBA_CACHE_DIR")
+    if user_dir:
+        parent = source.parent.resolve()
+        dirs.append(Path(user_dir) / parent.relative_to(parent.anchor))
+    return dirs
+
+
+def refresh_cache(sources: list[Path], digest: str) -> int:
+    """Delete the cached kernels of ``sources`` in every cache directory whose stamp is not
+    ``digest``, then stamp it; returns the number of files deleted. A missing directory is
+    created and stamped (numba fills it next); one that cannot be written is skipped (numba
+    cannot cache there either)."""
+    by_dir: dict[Path, list[str]] = {}
+    for src in sources:
+        for d in cache_dirs(src):
+            by_dir.setdefault(d, []).append(src.stem)
+    deleted = 0
+    for d, stems in by_dir.items():
+        stamp = d / STAMP_NAME
+        try:
+            d.mkdir(parents=True, exist_ok=True)
+            if stamp.is_file() and stamp.read_text().strip() == digest:
+                continue
+            for stem in stems:
+                for f in [*d.glob(f"{stem}.*.nbi"), *d.glob(f"{stem}.*.nbc")]:
+                    f.unlink(missing_ok=True)
+                    deleted += 1
+            stamp.write_text(digest + "\n")
+        except OSError:
+            continue
+    return deleted
+
+
+def ensure_fresh_kernel_cache() -> int:
+    """``refresh_cache`` for IMPACT's own kernel modules (called on ``import impact_envs``)."""
+    sources = kernel_sources()
+    return refresh_cache(sources, sources_digest(sources))

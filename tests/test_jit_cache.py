@@ -1,0 +1,58 @@
+"""The kernel-cache guard: stale numba caches are deleted when any kernel source changes."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from impact_envs import jit_cache
+
+
+def test_kernel_sources_list_every_module_with_njit():
+    with_njit = {
+        p.relative_to(jit_cache.PACKAGE_DIR).as_posix()
+        for p in jit_cache.PACKAGE_DIR.rglob("*.py")
+        if re.search(r"^@njit", p.read_text(), re.MULTILINE)
+    }
+    assert with_njit == set(jit_cache.KERNEL_SOURCES)
+
+
+def _fake_cache(tmp_path: Path) -> tuple[list[Path], Path]:
+    pkg = tmp_path / "pkg"
+    (pkg / "__pycache__").mkdir(parents=True)
+    sources = [pkg / "kern.py", pkg / "loop.py"]
+    for src in sources:
+        src.write_text(f"# {src.stem}\n")
+    for name in ("kern.tick-10.py311.nbi", "kern.tick-10.py311.1.nbc", "loop.fused-4.py311.nbi",
+                 "other.f-1.py311.nbi"):
+        (pkg / "__pycache__" / name).write_bytes(b"x")
+    return sources, pkg / "__pycache__"
+
+
+def test_refresh_deletes_kernels_of_a_changed_source_set_once(tmp_path, monkeypatch):
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    sources, cache = _fake_cache(tmp_path)
+    digest = jit_cache.sources_digest(sources)
+    assert jit_cache.refresh_cache(sources, digest) == 3  # no stamp yet: everything of ours
+    assert sorted(p.name for p in cache.iterdir()) == [jit_cache.STAMP_NAME,
+                                                       "other.f-1.py311.nbi"]
+    (cache / "loop.fused-4.py311.nbi").write_bytes(b"x")  # numba recompiled
+    assert jit_cache.refresh_cache(sources, digest) == 0  # unchanged sources: kept
+    sources[0].write_text("# kern, edited\n")  # only the callee changed
+    new_digest = jit_cache.sources_digest(sources)
+    assert new_digest != digest
+    assert jit_cache.refresh_cache(sources, new_digest) == 1  # the caller's cache goes too
+    assert (cache / jit_cache.STAMP_NAME).read_text().strip() == new_digest
+
+
+def test_refresh_covers_numba_cache_dir(tmp_path, monkeypatch):
+    sources, _ = _fake_cache(tmp_path)
+    user = tmp_path / "numba_cache"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(user))
+    mirror = jit_cache.cache_dirs(sources[0])[1]
+    assert mirror.is_relative_to(user)
+    mirror.mkdir(parents=True)
+    (mirror / "kern.tick-10.py311.nbi").write_bytes(b"x")
+    jit_cache.refresh_cache(sources, "new")
+    assert not (mirror / "kern.tick-10.py311.nbi").exists()
+    assert (mirror / jit_cache.STAMP_NAME).read_text().strip() == "new"
