@@ -6,7 +6,10 @@ Usage::
 
 Columns: policy step, TCP height, commanded target height, gripper command, object height,
 internal-model prediction / slow estimate / raw estimate of the vertical wrench [N], gate
-state. The traces quoted in docs/results.md come from this command.
+state. The traces quoted in docs/results.md come from this command. Calligraphy adds the
+writing summary (force in band, stroke RMS) on the last line. ``--no-joint-friction`` zeroes
+the arm joints' Coulomb friction in the simulated plant (an ablation of the robot, not of the
+controller), to see what the friction dead-band costs.
 """
 
 from __future__ import annotations
@@ -26,10 +29,13 @@ HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate"
 
 
 def trace(env_id: str, method: str, value: float, seed: int, every: int,
-          overrides: Sequence[str] = ()) -> list[str]:
+          overrides: Sequence[str] = (), joint_friction: bool = True) -> list[str]:
     """Run one episode (until success or the step limit); return the printed lines."""
     spec = resolve_method(method)
     env = make_env(check_env_id(env_id), spec.controller, overrides)
+    if not joint_friction:
+        sim = env.unwrapped.sim
+        sim.model.dof_frictionloss[sim.arm_dof] = 0.0
     param = describe_env(env).param_name
     policy = spec.build(env_id, env)
     obs, _ = env.reset(seed=seed, options={param: value})
@@ -48,7 +54,11 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
                 f"{info['wrench_slow_world'][2]:7.1f} {info['wrench_ext_world'][2]:7.1f} "
                 f"{int(info['gate_open']):5d}")
         step += 1
-    lines.append(f"success: {bool(info['is_success'])} after {step} steps")
+    end = f"success: {bool(info['is_success'])} after {step} steps"
+    if "in_band_frac" in info:
+        end += (f"; writing: force in band {info['in_band_frac']:.0%}, "
+                f"stroke RMS {1e3 * info['stroke_rms_m']:.1f} mm")
+    lines.append(end)
     env.close()
     return lines
 
@@ -63,12 +73,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--every", type=int, default=30, help="print every N policy steps")
     parser.add_argument("--controller-set", action="append", default=[],
                         metavar="SECTION.FIELD=VALUE", help="as impact-eval --controller-set")
+    parser.add_argument("--no-joint-friction", action="store_true",
+                        help="zero the arm joints' Coulomb friction in the simulated plant")
     args = parser.parse_args(argv)
     if args.every < 1:
         parser.error(f"invalid --every {args.every}; valid: >= 1")
     try:
         lines = trace(args.env, args.method, args.value, args.seed, args.every,
-                      args.controller_set)
+                      args.controller_set, joint_friction=not args.no_joint_friction)
     except ImpactError as exc:  # unknown env / method, bad value, missing checkpoint
         print(f"{parser.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise SystemExit(2) from None

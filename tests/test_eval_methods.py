@@ -101,6 +101,27 @@ def test_trace_prints_one_episode():
     assert len(lines) >= 4
 
 
+def test_trace_without_joint_friction_zeroes_the_plants_friction(monkeypatch):
+    """--no-joint-friction: the arm's dof friction is 0 in the episode's model (after reset),
+    and a Calligraphy trace ends with the writing summary."""
+    import impact_eval.trace as trace_mod
+    from impact_eval import envs as envs_mod
+
+    made = []
+
+    def recording_make_env(*args, **kwargs):
+        made.append(envs_mod.make_env(*args, **kwargs))
+        return made[-1]
+
+    monkeypatch.setattr(trace_mod, "make_env", recording_make_env)
+    lines = trace_mod.trace("IMPACT/Calligraphy-v0", "scripted", 0.1, seed=0, every=1000,
+                            joint_friction=False)
+    sim = made[0].unwrapped.sim
+    assert np.all(sim.model.dof_frictionloss[sim.arm_dof] == 0.0)
+    assert sim.data.nf == 0  # no Coulomb-friction constraint rows left in the plant
+    assert "writing: force in band" in lines[-1]
+
+
 @pytest.mark.parametrize("argv", [["--method", "nope", "--value", "1"],
                                   ["--method", "scripted", "--value", "-3"],
                                   ["--env", "IMPACT/Nope-v0", "--method", "scripted",
