@@ -30,7 +30,7 @@ KERNEL_SOURCES = (
     "control/kernel_stages.py",
     "control/kernels.py",
     "robot/loop.py",
-    "robot/sim.py",
+    "robot/sim_kernels.py",
 )
 """Every module (relative to the package) that defines ``@njit`` functions; located without
 importing anything (tests/test_jit_cache.py checks that the list is complete)."""

@@ -14,7 +14,8 @@ from numba import njit
 
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.kernels import BAD_QUAT, NON_FINITE, controller_tick_chain, limiter_views
-from impact_envs.robot.sim import FrankaSim, _actuate, _sense
+from impact_envs.robot.sim import FrankaSim
+from impact_envs.robot.sim_kernels import actuate, sense
 
 
 def control_tick(
@@ -63,7 +64,7 @@ def fused_tick(
     if i > 0:
         for j in range(n):
             qvels[i - 1, j] = qvel_arm[j]
-    _sense(noise[i], stds, qpos_arm, qvel_arm, qfrc_act, qfrc_damp, friction, bias, sensed)
+    sense(noise[i], stds, qpos_arm, qvel_arm, qfrc_act, qfrc_damp, friction, bias, sensed)
     flags = controller_tick_chain(
         chain, chain_work, need_coriolis, q_model, dq_model, sensed[:n], sensed[n:2 * n],
         sensed[2 * n:], pos_targets[i], quat_targets[i], wrench_cmd, mask,
@@ -71,7 +72,7 @@ def fused_tick(
         model32, weights, biases, model, imp, lim,
     )  # fmt: skip
     if not flags & (BAD_QUAT | NON_FINITE):
-        _actuate(limiter_views(lim)[3], torque_limits, tau_applied, ctrl, arm_act, gripper_act,
+        actuate(limiter_views(lim)[3], torque_limits, tau_applied, ctrl, arm_act, gripper_act,
                  gripper_cmd)
     for j in range(n):
         taus[i, j] = tau_applied[j]

@@ -8,21 +8,28 @@ names that say so; the controller never sees it.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
 import numpy as np
-from numba import njit
 
-from impact_envs.control.kernels import saturate
 from impact_envs.errors import InvalidArgumentError, SimulationError
 from impact_envs.robot.dynamics import ARM_JOINTS, FINGER_JOINTS
+from impact_envs.robot.sim_kernels import (
+    GROUP_OBJECT,
+    GROUP_OTHER,
+    GROUP_ROBOT,
+    actuate,
+    contact_sums,
+    count_body_contacts,
+    link_torque,
+    sense,
+    state_status,
+)
 
 ASSETS = Path(__file__).resolve().parent.parent / "assets"
 
-GROUP_OTHER, GROUP_ROBOT, GROUP_OBJECT = 0, 1, 2
 
 
 def _as_slice(indices: list[int]) -> slice | np.ndarray:
@@ -31,86 +38,6 @@ def _as_slice(indices: list[int]) -> slice | np.ndarray:
     if np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
         return slice(int(idx[0]), int(idx[0]) + idx.size)
     return idx
-
-
-@njit(cache=True)
-def _link_torque(qfrc_actuator, qfrc_damper, friction, out) -> None:
-    """out = motor torque + joint damping + dof Coulomb friction (link-side joint torque)."""
-    for j in range(out.shape[0]):
-        out[j] = qfrc_actuator[j] + qfrc_damper[j] + friction[j]
-
-
-@njit(cache=True)
-def _sense(z, stds, qpos, qvel, qfrc_actuator, qfrc_damper, friction, bias, out) -> None:
-    """out = [q, dq, tau] readings: true values + stds * z (tau also + bias), z (3n,)."""
-    n = qpos.shape[0]
-    tau = out[2 * n:]
-    _link_torque(qfrc_actuator, qfrc_damper, friction, tau)
-    for j in range(n):
-        out[j] = qpos[j] + stds[0] * z[j]
-        out[n + j] = qvel[j] + stds[1] * z[n + j]
-        tau[j] = tau[j] + bias[j] + stds[2] * z[2 * n + j]
-
-
-@njit(cache=True)
-def _actuate(tau, torque_limits, tau_applied, ctrl, arm_act, gripper_act, gripper_cmd) -> None:
-    """tau_applied = clip(tau, +-limits) -> ctrl[arm_act]; ctrl[gripper] from cmd in [-1, 1]."""
-    saturate(tau, torque_limits, tau_applied)
-    for j in range(arm_act.shape[0]):
-        ctrl[arm_act[j]] = tau_applied[j]
-    g = gripper_cmd
-    if g > 1.0:
-        g = 1.0
-    if g < -1.0:
-        g = -1.0
-    ctrl[gripper_act] = 0.02 * (1.0 - g)
-
-
-@njit(cache=True)
-def _state_status(qpos, qvel, max_speed) -> int:
-    """0 when finite and |qvel| <= max_speed everywhere, 1 if not finite, 2 if too fast."""
-    for v in qpos:
-        if not math.isfinite(v):
-            return 1
-    for v in qvel:
-        if not math.isfinite(v):
-            return 1
-    for v in qvel:
-        if abs(v) > max_speed:
-            return 2
-    return 0
-
-
-@njit(cache=True)
-def _count_body_contacts(ncon, geom, geom_bodyid, target, fingers) -> int:
-    """Contacts between body ``target`` and any body in ``fingers``."""
-    count = 0
-    for i in range(ncon):
-        b1, b2 = geom_bodyid[geom[i, 0]], geom_bodyid[geom[i, 1]]
-        if b1 == target or b2 == target:
-            for f in fingers:
-                if b1 == f or b2 == f:
-                    count += 1
-                    break
-    return count
-
-
-@njit(cache=True)
-def _contact_sums(ncon, geom, efc_address, efc_force, geom_group):
-    """Normal force sums (robot-environment, object-environment) over valid contacts."""
-    robot_env = obj_env = 0.0
-    for i in range(ncon):
-        adr = efc_address[i]
-        if adr < 0:
-            continue
-        g1, g2 = geom_group[geom[i, 0]], geom_group[geom[i, 1]]
-        if (g1 == GROUP_ROBOT and g2 == GROUP_OTHER) or (g2 == GROUP_ROBOT and g1 == GROUP_OTHER):
-            robot_env += efc_force[adr]
-        elif (g1 == GROUP_OBJECT and g2 == GROUP_OTHER) or (
-            g2 == GROUP_OBJECT and g1 == GROUP_OTHER
-        ):
-            obj_env += efc_force[adr]
-    return robot_env, obj_env
 
 
 @dataclass(frozen=True)
@@ -273,7 +200,7 @@ class FrankaSim:
         """
         z = rng.standard_normal(21) if noise is None else noise
         out = np.empty(21)
-        _sense(z, self._noise_stds, *self._arm_views(), self.friction_torque(), self._tau_bias,
+        sense(z, self._noise_stds, *self._arm_views(), self.friction_torque(), self._tau_bias,
                out)
         return out[:7], out[7:14], out[14:]
 
@@ -296,7 +223,7 @@ class FrankaSim:
         """
         tau = np.empty(7)
         qpos, qvel, qfrc_actuator, qfrc_damper = self._arm_views()
-        _link_torque(qfrc_actuator, qfrc_damper, self.friction_torque(), tau)
+        link_torque(qfrc_actuator, qfrc_damper, self.friction_torque(), tau)
         return tau
 
     def friction_torque(self) -> np.ndarray:
@@ -344,7 +271,7 @@ class FrankaSim:
         ``gripper_cmd`` in [-1, 1]: -1 fully open (0.08 m), +1 closed (force-limited squeeze).
         """
         self._arm_views()
-        _actuate(np.asarray(tau, dtype=np.float64), self.torque_limits, self.tau_applied,
+        actuate(np.asarray(tau, dtype=np.float64), self.torque_limits, self.tau_applied,
                  self._ctrl, self.arm_act, self.gripper_act, float(gripper_cmd))
 
     def step(self) -> None:
@@ -354,7 +281,7 @@ class FrankaSim:
     def check_finite(self) -> None:
         """Raise SimulationError when the state diverged."""
         d = self.data
-        status = _state_status(d.qpos, d.qvel, 100.0)
+        status = state_status(d.qpos, d.qvel, 100.0)
         if status == 1:
             raise SimulationError(f"non-finite state at t={d.time:.3f} s")
         if status == 2:
@@ -373,7 +300,7 @@ class FrankaSim:
         if ncon == 0:
             return 0.0, 0.0
         con = d.contact
-        return _contact_sums(ncon, con.geom, con.efc_address, d.efc_force, self.geom_group)
+        return contact_sums(ncon, con.geom, con.efc_address, d.efc_force, self.geom_group)
 
     def object_finger_contacts(self, object_body: str) -> int:
         """Number of finger-pad contacts touching ``object_body`` (privileged grasp check)."""
@@ -382,5 +309,5 @@ class FrankaSim:
         if ncon == 0:
             return 0
         target = m.body(object_body).id
-        return int(_count_body_contacts(ncon, d.contact.geom, m.geom_bodyid, target,
+        return int(count_body_contacts(ncon, d.contact.geom, m.geom_bodyid, target,
                                         self._finger_bodies))

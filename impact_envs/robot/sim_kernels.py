@@ -1,0 +1,96 @@
+"""Numba kernels of ``FrankaSim`` (sensing, actuation, state and contact checks).
+
+Compiled once and cached (``impact_envs.jit_cache`` keeps the cache in step); ``FrankaSim``
+and the fused tick loop (``robot/loop.py``) call them on views of ``MjData``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from impact_envs.control.kernels import saturate
+
+GROUP_OTHER, GROUP_ROBOT, GROUP_OBJECT = 0, 1, 2
+"""Contact classes of a geom (``FrankaSim`` classifies every geom once)."""
+
+
+@njit(cache=True)
+def link_torque(qfrc_actuator, qfrc_damper, friction, out) -> None:
+    """out = motor torque + joint damping + dof Coulomb friction (link-side joint torque)."""
+    for j in range(out.shape[0]):
+        out[j] = qfrc_actuator[j] + qfrc_damper[j] + friction[j]
+
+
+@njit(cache=True)
+def sense(z, stds, qpos, qvel, qfrc_actuator, qfrc_damper, friction, bias, out) -> None:
+    """out = [q, dq, tau] readings: true values + stds * z (tau also + bias), z (3n,)."""
+    n = qpos.shape[0]
+    tau = out[2 * n:]
+    link_torque(qfrc_actuator, qfrc_damper, friction, tau)
+    for j in range(n):
+        out[j] = qpos[j] + stds[0] * z[j]
+        out[n + j] = qvel[j] + stds[1] * z[n + j]
+        tau[j] = tau[j] + bias[j] + stds[2] * z[2 * n + j]
+
+
+@njit(cache=True)
+def actuate(tau, torque_limits, tau_applied, ctrl, arm_act, gripper_act, gripper_cmd) -> None:
+    """tau_applied = clip(tau, +-limits) -> ctrl[arm_act]; ctrl[gripper] from cmd in [-1, 1]."""
+    saturate(tau, torque_limits, tau_applied)
+    for j in range(arm_act.shape[0]):
+        ctrl[arm_act[j]] = tau_applied[j]
+    g = gripper_cmd
+    if g > 1.0:
+        g = 1.0
+    if g < -1.0:
+        g = -1.0
+    ctrl[gripper_act] = 0.02 * (1.0 - g)
+
+
+@njit(cache=True)
+def state_status(qpos, qvel, max_speed) -> int:
+    """0 when finite and |qvel| <= max_speed everywhere, 1 if not finite, 2 if too fast."""
+    for v in qpos:
+        if not math.isfinite(v):
+            return 1
+    for v in qvel:
+        if not math.isfinite(v):
+            return 1
+    for v in qvel:
+        if abs(v) > max_speed:
+            return 2
+    return 0
+
+
+@njit(cache=True)
+def count_body_contacts(ncon, geom, geom_bodyid, target, fingers) -> int:
+    """Contacts between body ``target`` and any body in ``fingers``."""
+    count = 0
+    for i in range(ncon):
+        b1, b2 = geom_bodyid[geom[i, 0]], geom_bodyid[geom[i, 1]]
+        if b1 == target or b2 == target:
+            for f in fingers:
+                if b1 == f or b2 == f:
+                    count += 1
+                    break
+    return count
+
+
+@njit(cache=True)
+def contact_sums(ncon, geom, efc_address, efc_force, geom_group):
+    """Normal force sums (robot-environment, object-environment) over valid contacts."""
+    robot_env = obj_env = 0.0
+    for i in range(ncon):
+        adr = efc_address[i]
+        if adr < 0:
+            continue
+        g1, g2 = geom_group[geom[i, 0]], geom_group[geom[i, 1]]
+        if (g1 == GROUP_ROBOT and g2 == GROUP_OTHER) or (g2 == GROUP_ROBOT and g1 == GROUP_OTHER):
+            robot_env += efc_force[adr]
+        elif (g1 == GROUP_OBJECT and g2 == GROUP_OTHER) or (
+            g2 == GROUP_OBJECT and g1 == GROUP_OTHER
+        ):
+            obj_env += efc_force[adr]
+    return robot_env, obj_env
