@@ -116,6 +116,25 @@ def test_checkpoint_round_trip_identical_actions(tmp_path):
     assert not np.array_equal(_rollout(other_seed, 4, 1), _rollout(policy, 4, 1))
 
 
+def test_binary_gripper_executes_the_sign_of_the_sample():
+    """binary_gripper: same samples, the gripper channel snapped to -1 / +1 (the others
+    untouched); off, the untrained net's samples lie between (the case that matters)."""
+    from dataclasses import replace
+
+    plain = random_policy(replace(SMALL, binary_gripper=False), seed=4)
+    snapped = random_policy(replace(SMALL, binary_gripper=True), seed=4)
+    a, b = _rollout(plain, 6, 9), _rollout(snapped, 6, 9)
+    grip_plain, grip_snapped = a[..., 9], b[..., 9]
+    assert np.mean(np.abs(grip_plain) < 0.9) > 0.3
+    np.testing.assert_array_equal(grip_snapped, np.where(grip_plain > 0.0, 1.0, -1.0))
+    np.testing.assert_array_equal(a[..., :9], b[..., :9])
+
+
+def test_binary_gripper_must_be_a_bool():
+    with pytest.raises(InvalidArgumentError, match="binary_gripper"):
+        DiffusionConfig.from_dict({"binary_gripper": "yes"})
+
+
 def _corrupt_model(path):
     (path / "model.safetensors").write_bytes(b"\x00garbage")
 

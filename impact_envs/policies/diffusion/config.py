@@ -49,6 +49,12 @@ class DiffusionConfig:
         prediction_type: What the network predicts: ``epsilon`` (noise) or ``sample``.
         clip_sample: Clip the denoised sample to ``[-1, 1]`` (normalized action space).
         num_inference_steps: DDIM steps at rollout.
+        binary_gripper: Execute the sign of the sampled gripper command (+1 closed, -1 open)
+            instead of its value. For demonstrations whose gripper command is binary (every
+            scripted expert here): a sample of, e.g., -0.6 half-closes the hand (the env maps
+            the command to a finger position), the policy then sees a gripper width no demo
+            shows and closes it further (docs/diffusion_policy.md). Set false for demonstrations
+            with a graded gripper command. Sampling only; changing it needs no retraining.
         range_eps: Normalizer range below which a dimension counts as constant [data units].
         batch_size: Training windows per optimizer step.
         lr: Peak AdamW learning rate.
@@ -75,6 +81,7 @@ class DiffusionConfig:
     prediction_type: str = "epsilon"
     clip_sample: bool = True
     num_inference_steps: int = 10
+    binary_gripper: bool = True
     range_eps: float = 1e-4
     batch_size: int = 256
     lr: float = 1e-4
@@ -103,6 +110,10 @@ class DiffusionConfig:
         for name in names:
             if getattr(self, name) < 1:
                 raise InvalidArgumentError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if not isinstance(self.binary_gripper, bool):
+            raise InvalidArgumentError(
+                f"binary_gripper must be true or false, got {self.binary_gripper!r}"
+            )
         if not self.obs_keys:
             raise InvalidArgumentError("obs_keys must name at least one observation key")
         if self.lr <= 0 or self.range_eps <= 0:

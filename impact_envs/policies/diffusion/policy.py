@@ -167,7 +167,11 @@ class DiffusionPolicy:
         actions = self.normalizer.action.inverse(sample)
         # clip_sample keeps positions in the demos' range and rot6d in [-1, 1]; a gripper
         # channel that was constant in the demos can land a little outside [-1, 1]
-        actions[..., GRIPPER_DIM].clamp_(-1.0, 1.0)
+        grip = actions[..., GRIPPER_DIM]
+        if cfg.binary_gripper:
+            actions[..., GRIPPER_DIM] = torch.where(grip > 0.0, 1.0, -1.0)
+        else:
+            grip.clamp_(-1.0, 1.0)
         start = cfg.n_obs_steps - 1
         return actions[:, start : start + cfg.n_action_steps].numpy().astype(np.float32)
 
