@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 
 import numpy as np
 import pytest
@@ -24,8 +25,8 @@ DIMS = {"ee_pos": 3, "ee_rot6d": 6, "gripper_width": 1, "object_pos": 3, "object
 DIMS |= {"goal_pos": 3, "joint_pos": 7}
 
 
-def write_dataset(path, n_episodes: int = 5, length: int = 12) -> None:
-    """Synthetic reach demos: the TCP moves linearly to a random goal."""
+def write_dataset(path, n_episodes: int = 5, length: int = 12, grip: float = 1.0) -> None:
+    """Synthetic reach demos: the TCP moves linearly to a random goal (gripper command ``grip``)."""
     rng = np.random.default_rng(0)
     writer = ReplayWriter(path, DIMS, {"env_id": "Synthetic-v0", "param_name": "object_mass"})
     rot6d = np.tile([1, 0, 0, 0, 1, 0], (length, 1)).astype(np.float32)
@@ -35,7 +36,7 @@ def write_dataset(path, n_episodes: int = 5, length: int = 12) -> None:
         obs = {k: np.zeros((length, d), np.float32) for k, d in DIMS.items()}
         obs["ee_pos"], obs["goal_pos"] = path_pos[:-1], np.tile(goal, (length, 1))
         obs["ee_rot6d"] = obs["object_rot6d"] = rot6d
-        actions = np.concatenate([path_pos[1:], rot6d, np.ones((length, 1))], axis=1)
+        actions = np.concatenate([path_pos[1:], rot6d, np.full((length, 1), grip)], axis=1)
         writer.append_episode(obs, actions, EpisodeMeta(0.2, ep, True, ep))
 
 
@@ -144,3 +145,22 @@ def test_train_cli_bad_input_is_one_line(tmp_path, capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("impact-train: error: dataset") and err.count("\n") == 1
+
+
+def test_graded_gripper_demos_need_binary_gripper_off(tmp_path, capsys):
+    """binary_gripper (default) would execute only the sign of a graded gripper command: refuse
+    such demos with a one-line error naming the setting; with it off they train."""
+    path = tmp_path / "graded.zarr"
+    write_dataset(path, grip=0.5)
+    with pytest.raises(SystemExit) as exc:
+        train_module.main(["--data", str(path), "--out", str(tmp_path / "run"), "--steps", "2",
+                           "--no-progress"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "binary_gripper" in err and err.count("\n") == 1
+    config = tmp_path / "cfg.json"
+    config.write_text(json.dumps({"down_dims": [16, 32], "batch_size": 8,
+                                  "binary_gripper": False}))
+    train_module.main(["--data", str(path), "--out", str(tmp_path / "run2"), "--steps", "2",
+                       "--no-progress", "--config", str(config)])
+    assert (tmp_path / "run2" / "policy" / "config.json").is_file()

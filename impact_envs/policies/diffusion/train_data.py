@@ -20,6 +20,7 @@ from impact_envs.policies.diffusion.dataset import (
 )
 from impact_envs.policies.diffusion.model import make_train_scheduler
 from impact_envs.policies.diffusion.normalizer import Normalizer
+from impact_envs.policies.diffusion.policy import GRIPPER_DIM
 
 
 @dataclass(frozen=True)
@@ -57,11 +58,21 @@ def split_episodes(n_episodes: int, val_fraction: float, seed: int) -> tuple[lis
     return sorted(order[n_val:].tolist()), sorted(order[:n_val].tolist())
 
 
+def _check_gripper(cfg: DiffusionConfig, gripper: np.ndarray) -> None:
+    """``binary_gripper`` executes only the sign of the gripper command: refuse graded demos."""
+    if cfg.binary_gripper and not np.all(np.isin(gripper, (-1.0, 1.0))):
+        raise InvalidArgumentError(
+            "the demos' gripper command takes values other than -1 and +1, but binary_gripper "
+            'is on; set "binary_gripper": false in the --config file'
+        )
+
+
 def load_train_data(cfg: DiffusionConfig, path: Path, val_fraction: float) -> TrainData:
     """Load ``path``, split episodes, fit the normalizer on the training part."""
     replay = load_replay(path)
     obs = replay.obs_matrix(cfg.obs_keys)
     actions = replay.data[ACTION_KEY]
+    _check_gripper(cfg, np.asarray(actions[:, GRIPPER_DIM]))
     train_eps, val_eps = split_episodes(replay.n_episodes, val_fraction, cfg.seed)
     starts = np.concatenate([[0], replay.episode_ends[:-1]])
     rows = np.concatenate([np.arange(starts[e], replay.episode_ends[e]) for e in train_eps])
