@@ -51,22 +51,25 @@ def check_env_id(env_id: str) -> str:
     return bare_id
 
 
-def make_env(env_id: str, controller: str, overrides: Sequence[str] = ()) -> gym.Env:
-    """``gym.make(env_id, controller=controller)`` with errors turned into ``ImpactError``.
+def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
+             preset: str = "default") -> gym.Env:
+    """``gym.make(env_id, controller=controller, controller_preset=preset)``, errors turned
+    into ``ImpactError``.
 
     IMPACT envs end an episode at success (``terminate_on_success=True``): success is then
     final, and a sweep does not spend the remaining steps of solved episodes. ``overrides``
     (``SECTION.FIELD=VALUE``, ``control.overrides``) change the controller's config from the
-    paper's defaults, for ablations.
+    preset's values, for ablations. Envs outside the IMPACT namespace get no preset argument.
     """
     extra: dict[str, object] = {}
     if env_id.split(":")[-1].startswith("IMPACT/"):
         extra["terminate_on_success"] = True
+        extra["controller_preset"] = preset
     if overrides:
-        from impact_envs.control.config import ControllerConfig
         from impact_envs.control.overrides import apply_overrides
+        from impact_envs.control.presets import preset_config
 
-        extra["controller_config"] = apply_overrides(ControllerConfig(), overrides)
+        extra["controller_config"] = apply_overrides(preset_config(preset), overrides)
     try:
         return gym.make(env_id, controller=controller, **extra)
     except ImpactError:

@@ -10,6 +10,9 @@ machinery tested) without the scripted experts, diffusion policies or Stable-Bas
 | `vanilla_dp`      | DP checkpoint `<env>/vanilla`            | `impedance` |
 | `augmented_dp`    | DP checkpoint `<env>/augmented`          | `impedance` |
 | `impact`          | DP checkpoint `<env>/vanilla`            | `impact`    |
+| `impact_paper`    | DP checkpoint `<env>/vanilla`            | `impact`, preset `paper` |
+| `impact_warm`     | DP checkpoint `<env>/vanilla`, warm internal model | `impact` |
+| `scripted_impact_paper` | scripted expert                    | `impact`, preset `paper` |
 | `sb3:<path.zip>`  | SB3 PPO / SAC / TD3 policy, deterministic | `impedance` |
 """
 
@@ -24,7 +27,8 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_envs.control.presets import PRESETS
+from impact_envs.errors import CheckpointError, InvalidArgumentError, check_choice
 from impact_envs.policies.protocol import Policy
 
 CONTROLLERS: tuple[str, ...] = ("impedance", "impact")
@@ -47,6 +51,16 @@ class MethodSpec:
     controller: str
     build: PolicyFactory
     description: str
+    preset: str = "default"
+    """Controller preset of the method's env (``impact_envs.control.presets.PRESETS``)."""
+    warm: bool = False
+    """Score episodes from an internal model already trained by one unscored warm-up episode
+    of the same cell ("warm robot", the paper's Phase B; docs/eval.md)."""
+
+    @property
+    def env_key(self) -> tuple[str, str]:
+        """(controller, preset): methods with equal keys can share envs."""
+        return self.controller, self.preset
 
 
 _REGISTRY: dict[str, MethodSpec] = {}
@@ -58,6 +72,7 @@ def register_method(spec: MethodSpec) -> None:
         raise InvalidArgumentError(
             f"invalid controller {spec.controller!r}; valid choices: {', '.join(CONTROLLERS)}"
         )
+    check_choice("controller preset", spec.preset, PRESETS)
     _REGISTRY[spec.name] = spec
 
 
@@ -177,5 +192,11 @@ for _spec in (
     MethodSpec("vanilla_dp", "impedance", _dp_factory("vanilla"), "Vanilla DP, impedance"),
     MethodSpec("augmented_dp", "impedance", _dp_factory("augmented"), "Augmented DP, impedance"),
     MethodSpec("impact", "impact", _dp_factory("vanilla"), "Vanilla DP + IMPACT controller"),
+    MethodSpec("scripted_impact_paper", "impact", _build_scripted,
+               "scripted expert, IMPACT control, paper preset", preset="paper"),
+    MethodSpec("impact_paper", "impact", _dp_factory("vanilla"),
+               "Vanilla DP + IMPACT controller, paper preset", preset="paper"),
+    MethodSpec("impact_warm", "impact", _dp_factory("vanilla"),
+               "Vanilla DP + IMPACT controller, internal model warmed up on the cell", warm=True),
 ):
     register_method(_spec)

@@ -127,9 +127,9 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
     envs = {}
     try:
         for spec in specs:
-            if spec.controller not in envs:
-                envs[spec.controller] = make_env(
-                    req.env_id, spec.controller, req.controller_overrides
+            if spec.env_key not in envs:
+                envs[spec.env_key] = make_env(
+                    req.env_id, spec.controller, req.controller_overrides, spec.preset
                 )
         first = next(iter(envs.values()))
         info = describe_env(first, req.param)
@@ -144,7 +144,7 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
 def _build_policies(req: SweepRequest, specs: list[MethodSpec], env_id: str) -> None:
     """Build each method's policy once (checkpoints load, experts exist), then drop it."""
     for spec in specs:
-        env = make_env(req.env_id, spec.controller)
+        env = make_env(req.env_id, spec.controller, preset=spec.preset)
         try:
             spec.build(env_id, env)
         except ImpactError:

@@ -19,9 +19,14 @@ from tqdm import tqdm
 from impact_envs.errors import ImpactError
 from impact_envs.policies.protocol import Policy
 from impact_eval.grid import episode_seed, format_value
+from impact_eval.methods import MethodSpec
 from impact_eval.rollout import EpisodeJob, LockstepBatch
 
 RowSink = Callable[[dict[str, object]], None]
+
+WARMUP_EPISODE = 2**20
+"""Episode index whose seed drives a cell's unscored warm-up episode (no scored episode
+of a sweep reaches it)."""
 
 
 class SweepError(ImpactError):
@@ -87,15 +92,18 @@ class Worker:
 
         import_env_module(cfg.env_id)
         self.cfg = cfg
-        self.envs: dict[str, list[object]] = {}
+        self.envs: dict[tuple[str, str], list[object]] = {}
         self.policies: dict[str, Policy] = {}
+        self.warm: dict[tuple[str, float], dict[str, object]] = {}
 
-    def _envs(self, controller: str, n: int) -> list[object]:
+    def _envs(self, spec: MethodSpec, n: int) -> list[object]:
+        """At least ``n`` envs of the method's (controller, preset)."""
         from impact_eval.envs import make_env
 
-        envs = self.envs.setdefault(controller, [])
+        envs = self.envs.setdefault(spec.env_key, [])
         while len(envs) < n:
-            envs.append(make_env(self.cfg.env_id, controller, self.cfg.controller_overrides))
+            envs.append(make_env(self.cfg.env_id, spec.controller,
+                                 self.cfg.controller_overrides, spec.preset))
         return envs
 
     def _policy(self, method: str) -> Policy:
@@ -103,7 +111,7 @@ class Worker:
 
         if method not in self.policies:
             spec = resolve_method(method)
-            env = self._envs(spec.controller, 1)[0]
+            env = self._envs(spec, 1)[0]
             self.policies[method] = spec.build(self.cfg.canonical_env_id, env)
         return self.policies[method]
 
@@ -111,7 +119,13 @@ class Worker:
         """Run one task; ``sink`` receives each full CSV row as its episode ends."""
         from impact_eval.methods import resolve_method
 
-        envs = self._envs(resolve_method(task.method).controller, len(task.jobs))
+        spec = resolve_method(task.method)
+        envs = self._envs(spec, len(task.jobs))
+        weights = self._warm_weights(spec, task.value) if spec.warm else None
+        for env in envs:
+            warm_start = getattr(env.unwrapped, "warm_start", None)  # type: ignore[attr-defined]
+            if callable(warm_start):
+                warm_start(weights)
         batch = LockstepBatch(
             envs, self._policy(task.method), self.cfg.param_name, self.cfg.policy_dt
         )
@@ -131,6 +145,25 @@ class Worker:
             )
 
         batch.run(task.jobs, on_finish, heartbeat)
+
+    def _warm_weights(self, spec: MethodSpec, value: float) -> dict[str, object]:
+        """Internal-model weights after the cell's unscored warm-up episode (cached).
+
+        The warm-up episode runs alone (a batch of one, fresh internal model) with its own
+        seed, ``episode_seed(seed, value_index, WARMUP_EPISODE)``, so every worker that runs a
+        part of the cell computes the same weights.
+        """
+        key = (spec.name, value)
+        if key not in self.warm:
+            env = self._envs(spec, 1)[0]
+            env.unwrapped.warm_start(None)  # type: ignore[attr-defined]
+            seed = episode_seed(self.cfg.seed, self.cfg.values.index(value), WARMUP_EPISODE)
+            batch = LockstepBatch([env], self._policy(spec.name), self.cfg.param_name,
+                                  self.cfg.policy_dt)
+            batch.run([EpisodeJob(value, seed, WARMUP_EPISODE)], lambda i, m: None)
+            model = env.unwrapped.controller.internal_model  # type: ignore[attr-defined]
+            self.warm[key] = model.weights()
+        return self.warm[key]
 
     def close(self) -> None:
         """Close every env."""

@@ -1,4 +1,7 @@
-"""Frozen configuration dataclasses of the controller core, with the paper's defaults.
+"""Frozen configuration dataclasses of the controller core, with the ``default`` preset.
+
+``impact_envs.control.presets.preset_config("paper")`` gives the paper-literal table; the
+fields where the two differ are listed in ``presets.DEPARTURES``.
 
 Every field names its unit; wrenches and Cartesian gains are ordered (force/translation x, y, z;
 torque/rotation x, y, z) in the world (= robot base) frame. Sources of the defaults are listed
@@ -123,13 +126,14 @@ class SlowWrenchConfig:
     """Clipped first-order filter producing w_slow, the internal model's training target.
 
     Attributes:
-        rate_force_per_s: eta of the force axes [1/s]; per-tick gain eta * dt (paper: 2.0).
+        rate_force_per_s: eta of the force axes [1/s]; per-tick gain eta * dt (default 20,
+            a 50 ms time constant; paper: 2.0, docs/controller.md "Presets").
         rate_torque_per_s: eta of the torque axes [1/s] (paper: 1.0).
         clip_force_n: Per-axis clip of (w_ext - w_slow) on force axes [N] (paper: 10).
         clip_torque_nm: Per-axis clip on torque axes [Nm] (paper: 1).
     """
 
-    rate_force_per_s: float = 2.0
+    rate_force_per_s: float = 20.0
     rate_torque_per_s: float = 1.0
     clip_force_n: float = 10.0
     clip_torque_nm: float = 1.0
@@ -142,7 +146,7 @@ class SlowWrenchConfig:
 
     @property
     def max_force_slew_n_per_s(self) -> float:
-        """Largest per-axis force rate of w_slow, eta_f * clip_f [N/s] (20 N/s by default)."""
+        """Largest per-axis force rate of w_slow, eta_f * clip_f [N/s] (default 200, paper 20)."""
         return self.rate_force_per_s * self.clip_force_n
 
 
@@ -153,12 +157,14 @@ class InternalModelConfig:
     Attributes:
         history_length: Ticks L of per-tick features fed to the network (paper: 32).
         hidden_sizes: Widths of the tanh hidden layers (own choice: (64, 64)).
-        learning_rate: Plain SGD step size on the normalized MSE (paper: 0.01).
-        surprise_open_n: Gate opens when the force surprise reaches this value [N] (paper: 5).
+        learning_rate: Plain SGD step size on the normalized MSE (default 0.1; paper: 0.01).
+        surprise_open_n: Gate opens when the force surprise reaches this value [N] (default
+            2.5, about 8 standard deviations of the simulated estimator's noise; paper: 5).
         surprise_release_n: Open gate closes when the force surprise falls below this [N]
             (own choice 0.5; equal to ``surprise_open_n`` gives the literal single threshold).
         slow_rate_max: Learning only while the slow-wrench rate (|dw_slow/dt|_force divided by
-            eta_f * clip_f, dimensionless) is at most this (paper: 0.2).
+            eta_f * clip_f, dimensionless) is at most this (default 1.5: pauses only while
+            w_slow slews on several force axes at once; paper: 0.2).
         update_every: Ticks between SGD steps while learning (own choice: 5).
         batch_size: Samples per SGD step: the current one plus replayed ones (own choice: 16).
         replay_capacity: FIFO capacity of the replay buffer [samples] (own choice: 256).
@@ -168,10 +174,10 @@ class InternalModelConfig:
 
     history_length: int = 32
     hidden_sizes: tuple[int, ...] = (64, 64)
-    learning_rate: float = 0.01
-    surprise_open_n: float = 5.0
+    learning_rate: float = 0.1
+    surprise_open_n: float = 2.5
     surprise_release_n: float = 0.5
-    slow_rate_max: float = 0.2
+    slow_rate_max: float = 1.5
     update_every: int = 5
     batch_size: int = 16
     replay_capacity: int = 256

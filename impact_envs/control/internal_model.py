@@ -250,6 +250,15 @@ class InternalModel:
         return loss
 
     # ----------------------------------------------------------------- persistence
+    def weights(self) -> dict[str, torch.Tensor]:
+        """A copy of the network's weights (``load_weights`` restores them)."""
+        return {k: v.detach().clone() for k, v in self.net.state_dict().items()}
+
+    def load_weights(self, weights: dict[str, torch.Tensor]) -> None:
+        """Set the network's weights in place (a copy of ``weights``, same shapes required)."""
+        self.net.load_state_dict(weights)
+        self.refresh_fast_path()
+
     def save(self, path: str | Path) -> Path:
         """Write weights to ``path`` (.safetensors) and the config to the same stem + .json."""
         path = Path(path)

@@ -7,6 +7,7 @@ steps), runs the controller on *noisy* sensor readings every tick, and applies t
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Literal
 
 import gymnasium as gym
@@ -15,6 +16,7 @@ import numpy as np
 from gymnasium import spaces
 
 from impact_envs.control.config import ControllerConfig, EstimatorConfig
+from impact_envs.control.presets import PRESETS, preset_config, preset_name
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.errors import InvalidArgumentError, check_choice
@@ -65,9 +67,11 @@ class ImpactEnv(gym.Env):
         height: int = 240,
         camera: str = "front",
         controller_config: ControllerConfig | None = None,
+        controller_preset: str = "default",
     ) -> None:
         check_choice("controller", controller, CONTROLLERS)
         check_choice("estimator", estimator, ESTIMATORS)
+        check_choice("controller_preset", controller_preset, PRESETS)
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
         self.task = task = self.make_task()
@@ -87,8 +91,16 @@ class ImpactEnv(gym.Env):
             self._params[name] = task.param(name).validate(value)
         perturbation = ModelPerturbation(link_mass_scale=1.0 + float(model_mass_error))
         self.dynamics = PinocchioArm(perturbation=perturbation)
-        cfg = controller_config or ControllerConfig(estimator=EstimatorConfig(kind=estimator))
+        if controller_config is None:
+            cfg = preset_config(controller_preset)
+            cfg = dataclasses.replace(cfg, estimator=EstimatorConfig(kind=estimator))
+        else:
+            cfg = controller_config
         self.controller = ImpactController(self.dynamics, cfg, mode=controller)
+        self.controller_preset = controller_preset if controller_config is None else (
+            preset_name(cfg))
+        """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
+        self._warm_weights: dict[str, Any] | None = None
         self._camera = camera
         self._size = (int(height), int(width))
         self._renderer: mujoco.Renderer | None = None
@@ -131,6 +143,16 @@ class ImpactEnv(gym.Env):
         """Persistently set a task parameter (used by resets without options)."""
         self._params[name] = self.task.param(name).validate(value)
 
+    def warm_start(self, weights: dict[str, Any] | None) -> None:
+        """Start every later episode's internal model from ``weights`` (``None``: fresh).
+
+        ``weights`` as returned by ``controller.internal_model.weights()`` (e.g. after an
+        unscored warm-up episode): each ``reset`` loads a copy, with an empty replay buffer,
+        so scored episodes stay independent of one another ("warm robot", docs/eval.md).
+        """
+        self._warm_weights = None if weights is None else {
+            k: v.clone() for k, v in weights.items()}
+
     def set_object_mass(self, mass_kg: float) -> None:
         """Persistently set the object mass [kg]."""
         self.set_param("object_mass", mass_kg)
@@ -149,6 +171,8 @@ class ImpactEnv(gym.Env):
         sim.reset_robot(q0, 0.04, rng)
         mujoco.mj_forward(sim.model, sim.data)
         self.controller.reset(q0, keep_internal_model=self.persist_internal_model)
+        if self._warm_weights is not None:
+            self.controller.internal_model.load_weights(self._warm_weights)
         self.dynamics.update(q0, np.zeros(7))
         self._target_pos = self.dynamics.pos_ee_world.copy()
         self._target_quat = matrix_to_quat(self.dynamics.rot_ee_world)
@@ -272,6 +296,7 @@ class ImpactEnv(gym.Env):
             "wrench_ff_world": s.wrench_ff_world.copy(),
             "wrench_imp_world": s.wrench_imp_world.copy(),
             "gate_open": bool(s.gate_open),
+            "controller_preset": self.controller_preset,
             "tau_nm": self.sim.tau_applied.copy(),
         }
         m = metrics or {"energy_j": 0.0, "peak_torque_nm": 0.0,

@@ -1,0 +1,53 @@
+"""Named controller presets: ``"default"`` (the shipped configuration) and ``"paper"``.
+
+``paper`` is the literal reading of the IMPACT paper's hyper-parameter table, exactly the
+defaults this project shipped until 2026-11-24 (every field equal, bit for bit).
+``default`` departs from it in the fields listed in ``DEPARTURES``, each chosen by measurement
+on tuning seeds and justified in docs/controller.md ("Presets"); the ablation that reverts
+each one alone is in docs/results.md.
+
+    ControllerConfig()                     # the "default" preset
+    preset_config("paper")                 # the paper-literal table
+    gym.make("IMPACT/Hammer-v0", controller_preset="paper")
+"""
+
+from __future__ import annotations
+
+from impact_envs.control.config import ControllerConfig
+from impact_envs.control.overrides import apply_overrides
+from impact_envs.errors import check_choice
+
+PRESETS: tuple[str, ...] = ("default", "paper")
+"""Valid preset names."""
+
+DEPARTURES: dict[str, str] = {
+    "internal_model.slow_rate_max": "0.2",
+    "slow_wrench.rate_force_per_s": "2.0",
+    "internal_model.learning_rate": "0.01",
+    "internal_model.surprise_open_n": "5.0",
+}
+"""Fields where ``default`` differs from ``paper``, with the paper's value (``SECTION.FIELD``
+keys, the syntax of ``--controller-set``; ``revert_departure`` applies one)."""
+
+
+def preset_config(name: str) -> ControllerConfig:
+    """The ``ControllerConfig`` of preset ``name`` (one of ``PRESETS``)."""
+    check_choice("controller preset", name, PRESETS)
+    if name == "default":
+        return ControllerConfig()
+    return revert_departures(ControllerConfig(), DEPARTURES)
+
+
+def revert_departures(config: ControllerConfig, keys: object) -> ControllerConfig:
+    """``config`` with the listed ``DEPARTURES`` keys set back to the paper's values."""
+    for key in keys:  # type: ignore[attr-defined]
+        check_choice("departure", key, tuple(DEPARTURES))
+    return apply_overrides(config, [f"{key}={DEPARTURES[key]}" for key in keys])  # type: ignore[attr-defined]
+
+
+def preset_name(config: ControllerConfig) -> str:
+    """Name of the preset ``config`` equals field for field, else ``"custom"``."""
+    for name in PRESETS:
+        if preset_config(name) == config:
+            return name
+    return "custom"
