@@ -9,9 +9,10 @@ machinery tested) without the scripted experts, diffusion policies or Stable-Bas
 | `scripted_impact` | scripted expert                          | `impact`    |
 | `vanilla_dp`      | DP checkpoint `<env>/vanilla`            | `impedance` |
 | `augmented_dp`    | DP checkpoint `<env>/augmented`          | `impedance` |
-| `impact`          | DP checkpoint `<env>/vanilla`            | `impact`    |
+| `impact`          | DP checkpoint `<env>/impact`, else `<env>/vanilla` | `impact` |
+| `impact_vanilla`  | DP checkpoint `<env>/vanilla`            | `impact`    |
 | `impact_paper`    | DP checkpoint `<env>/vanilla`            | `impact`, preset `paper` |
-| `impact_warm`     | DP checkpoint `<env>/vanilla`, warm internal model | `impact` |
+| `impact_warm`     | as `impact`, warm internal model         | `impact`    |
 | `scripted_impact_paper` | scripted expert                    | `impact`, preset `paper` |
 | `sb3:<path.zip>`  | SB3 PPO / SAC / TD3 policy, deterministic | `impedance` |
 """
@@ -149,6 +150,16 @@ def _dp_factory(variant: str) -> PolicyFactory:
     return build
 
 
+def _build_impact_dp(env_id: str, env: gym.Env) -> Policy:
+    """The env's ``impact`` checkpoint (demos recorded under the IMPACT controller at the
+    nominal mass) where one ships, else its ``vanilla`` checkpoint."""
+    try:
+        checkpoint_dir(env_id, "impact")
+    except CheckpointError:
+        return _dp_factory("vanilla")(env_id, env)
+    return _dp_factory("impact")(env_id, env)
+
+
 class SB3Policy:
     """Stable-Baselines3 model behind the batched ``Policy`` protocol (deterministic actions)."""
 
@@ -191,12 +202,16 @@ for _spec in (
     MethodSpec("scripted_impact", "impact", _build_scripted, "scripted expert, IMPACT control"),
     MethodSpec("vanilla_dp", "impedance", _dp_factory("vanilla"), "Vanilla DP, impedance"),
     MethodSpec("augmented_dp", "impedance", _dp_factory("augmented"), "Augmented DP, impedance"),
-    MethodSpec("impact", "impact", _dp_factory("vanilla"), "Vanilla DP + IMPACT controller"),
+    MethodSpec("impact", "impact", _build_impact_dp,
+               "nominal-mass DP (impact checkpoint, else vanilla) + IMPACT controller"),
+    MethodSpec("impact_vanilla", "impact", _dp_factory("vanilla"),
+               "Vanilla DP + IMPACT controller (the vanilla checkpoint even where an impact "
+               "checkpoint ships)"),
     MethodSpec("scripted_impact_paper", "impact", _build_scripted,
                "scripted expert, IMPACT control, paper preset", preset="paper"),
     MethodSpec("impact_paper", "impact", _dp_factory("vanilla"),
                "Vanilla DP + IMPACT controller, paper preset", preset="paper"),
-    MethodSpec("impact_warm", "impact", _dp_factory("vanilla"),
+    MethodSpec("impact_warm", "impact", _build_impact_dp,
                "Vanilla DP + IMPACT controller, internal model warmed up on the cell", warm=True),
 ):
     register_method(_spec)

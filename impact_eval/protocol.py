@@ -17,6 +17,10 @@ lateral tracking lag of a moving impedance target does not count as load error):
   samples only, so the lag behind a target that has just moved (the lift, or the descent to
   the pad while the object is still aloft) does not count, as for the settled peak; the
   earliest adaptation it can report is therefore ``SETTLE_S`` after the lift ends.
+- ``adapt_liftoff_s``: time from lift-off (the first grasped sample with the object 2 cm above
+  where it started) until ``|e_z|`` stays below 1 cm on every aloft sample (NaN if never).
+  Aloft samples, not only settled ones, so it can report adaptation during the first second
+  after the lift; samples while the target still moves vertically do not count.
 - ``peak_err_z_m``: worst ``|e_z|`` while aloft; Phase B's is the "zero-delay" check.
 - ``peak_err_z_settled_m``: the same, counting only samples at least ``SETTLE_S`` after the
   target last moved vertically: the lift's tracking lag (D v / K, decaying with the
@@ -27,7 +31,9 @@ lateral tracking lag of a moving impedance target does not count as load error):
 ``--repeats N`` runs the whole A/B/C sequence N times with base seeds ``seed + 100 k`` (the
 episodes of a sequence use ``base + episode``), so one seed's luck (where the arm happens to
 stop inside the joint-friction dead-band) is not taken for the controller's behaviour.
-``metrics.csv`` holds one row per repeat, controller and phase; ``summary.csv`` the median,
+Three controllers run each sequence: ``impact`` (the ``default`` preset), ``impact_paper`` (the
+``paper`` preset) and ``impedance``. ``metrics.csv`` holds one row per repeat, controller and
+phase; ``summary.csv`` the median,
 minimum and maximum over the repeats; ``timeseries.csv`` and the figure show the first repeat.
 """
 
@@ -59,6 +65,9 @@ ADAPTED_M = 0.01
 SETTLE_S = 1.0
 """Settling time after the last vertical target motion for ``peak_err_z_settled_m`` [s]."""
 AXES = ("fx", "fy", "fz", "tx", "ty", "tz")
+CONTROLLERS = {"impact": ("impact", "default"), "impact_paper": ("impact", "paper"),
+               "impedance": ("impedance", "default")}
+"""Column label -> (env ``controller``, ``controller_preset``)."""
 SIGNALS = ("wrench_imp_world", "wrench_ext_world", "wrench_slow_world", "wrench_pred_world",
            "wrench_ff_world")
 
@@ -78,10 +87,14 @@ def protocol_expert(env_id: str, hold_s: float) -> PickPlaceExpert:
 
 def run_sequence(env_id: str, controller: str, masses: tuple[float, ...],
                  seed: int, hold_s: float = 0.0) -> pd.DataFrame:
-    """Run one episode per mass with a persistent internal model; rows at 30 Hz."""
+    """Run one episode per mass with a persistent internal model; rows at 30 Hz.
+
+    ``controller``: a key of ``CONTROLLERS``.
+    """
     expert = protocol_expert(env_id, hold_s)
-    env = gym.make(env_id, controller=controller, persist_internal_model=True,
-                   terminate_on_success=True)
+    mode, preset = CONTROLLERS[controller]
+    env = gym.make(env_id, controller=mode, controller_preset=preset,
+                   persist_internal_model=True, terminate_on_success=True)
     param = env.unwrapped.param_name
     rows, t_offset = [], 0.0
     for episode, mass in enumerate(masses):
@@ -129,23 +142,43 @@ def _adapt_time(t: np.ndarray, ez: np.ndarray, t_grasp: float) -> float:
     return np.nan
 
 
+def _adapt_after_liftoff(t: np.ndarray, ez: np.ndarray, lifted: np.ndarray,
+                         target_vz: np.ndarray) -> float:
+    """``_adapt_time`` from lift-off (first ``lifted`` sample) over the first stretch of
+    aloft samples (lifted, target vertically still).
+
+    The stretch ends where the target next moves vertically (the descent to the goal), so the
+    lag behind that later motion is not taken for load error.
+    """
+    still = np.abs(target_vz) < MAX_TARGET_VZ_M_S
+    aloft = lifted & still
+    first = int(np.argmax(aloft))
+    moving = np.flatnonzero(~still[first:])
+    window = aloft.copy()
+    if moving.size:
+        window[first + int(moving[0]):] = False
+    return _adapt_time(t[window], ez[window], t[int(np.argmax(lifted))])
+
+
 def phase_metrics(df: pd.DataFrame) -> pd.DataFrame:
     """Adaptation time, peak and steady vertical error while the object is held aloft."""
     out = []
     for (controller, episode), ep in df.groupby(["controller", "episode"], sort=True):
         row = {"controller": controller, "episode": episode, "phase": ep["phase"].iloc[0],
                "success": bool(ep["is_success"].any()), "adapt_time_s": np.nan,
+               "adapt_liftoff_s": np.nan,
                "peak_err_z_m": np.nan, "peak_err_z_settled_m": np.nan,
                "steady_err_z_m": np.nan}
         grasped = ep["is_grasped"].to_numpy()
         target_vz = np.gradient(ep["target_z_m"].to_numpy(), ep["t_episode_s"].to_numpy())
         settled = _time_since_vertical_motion(ep["t_episode_s"].to_numpy(), target_vz) >= SETTLE_S
-        aloft = (grasped & (ep["object_z_m"].to_numpy() > ep["object_z_m"].iloc[0] + 0.02)
-                 & (np.abs(target_vz) < MAX_TARGET_VZ_M_S))
+        lifted = grasped & (ep["object_z_m"].to_numpy() > ep["object_z_m"].iloc[0] + 0.02)
+        aloft = lifted & (np.abs(target_vz) < MAX_TARGET_VZ_M_S)
         if grasped.any() and aloft.sum() > 3:
             t_all = ep["t_episode_s"].to_numpy()
             ez_all = ep["err_z_m"].abs().to_numpy()
             ez = ez_all[aloft]
+            row["adapt_liftoff_s"] = _adapt_after_liftoff(t_all, ez_all, lifted, target_vz)
             row["peak_err_z_m"] = float(ez.max())
             row["steady_err_z_m"] = float(np.median(ez[-max(1, len(ez) // 3):]))
             ok = aloft & settled
@@ -163,12 +196,14 @@ def summarize(metrics: pd.DataFrame) -> pd.DataFrame:
     ``adapt_time_s`` counts the repeats that never adapted (NaN) in ``never``; its statistics
     are over the repeats that did.
     """
-    cols = ["adapt_time_s", "peak_err_z_m", "peak_err_z_settled_m", "steady_err_z_m"]
+    cols = ["adapt_time_s", "adapt_liftoff_s", "peak_err_z_m", "peak_err_z_settled_m",
+            "steady_err_z_m"]
     rows = []
     for (controller, phase), g in metrics.groupby(["controller", "phase"], sort=False):
         row = {"controller": controller, "phase": phase, "repeats": len(g),
                "successes": int(g["success"].sum()),
-               "adapt_never": int(g["adapt_time_s"].isna().sum())}
+               "adapt_never": int(g["adapt_time_s"].isna().sum()),
+               "adapt_liftoff_within_1_5s": int((g["adapt_liftoff_s"] <= 1.5).sum())}
         for col in cols:
             v = g[col].dropna()
             for stat, fn in (("median", np.median), ("min", np.min), ("max", np.max)):
@@ -249,7 +284,7 @@ def main(argv: list[str] | None = None) -> int:
     for k in range(args.repeats):
         seed = args.seed + REPEAT_SEED_STRIDE * k
         df = pd.concat([run_sequence(args.env, c, masses, seed, args.hold_s)
-                        for c in ("impact", "impedance")], ignore_index=True)
+                        for c in CONTROLLERS], ignore_index=True)
         if k == 0:
             df.to_csv(args.out / "timeseries.csv", index=False)
             figs = plot(df, args.out / "protocol")

@@ -6,10 +6,11 @@ Usage::
 
 Columns: policy step, TCP height, commanded target height, gripper command, object height,
 internal-model prediction / slow estimate / raw estimate of the vertical wrench [N], gate
-state. The traces quoted in docs/results.md come from this command. Calligraphy adds the
-writing summary (force in band, stroke RMS) on the last line. ``--no-joint-friction`` zeroes
-the arm joints' Coulomb friction in the simulated plant (an ablation of the robot, not of the
-controller), to see what the friction dead-band costs.
+state. The last line counts, per joint, the policy steps whose final torque sat at the FR3
+limit (87 / 12 Nm). The traces quoted in docs/results.md come from this command. Calligraphy
+adds the writing summary (force in band, stroke RMS) on the last line.
+``--no-joint-friction`` zeroes the arm joints' Coulomb friction in the simulated plant (an
+ablation of the robot, not of the controller), to see what the friction dead-band costs.
 """
 
 from __future__ import annotations
@@ -32,7 +33,9 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
           overrides: Sequence[str] = (), joint_friction: bool = True) -> list[str]:
     """Run one episode (until success or the step limit); return the printed lines."""
     spec = resolve_method(method)
-    env = make_env(check_env_id(env_id), spec.controller, overrides)
+    env = make_env(check_env_id(env_id), spec.controller, overrides, spec.preset)
+    limit = np.asarray(env.unwrapped.controller.config.limits.torque_max_nm)
+    saturated = np.zeros(len(limit), dtype=int)
     if not joint_friction:
         sim = env.unwrapped.sim
         sim.model.dof_frictionloss[sim.arm_dof] = 0.0
@@ -47,6 +50,7 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
         action = np.asarray(policy.act(stack_obs([obs]))[0])
         obs, _, terminated, truncated, info = env.step(action)
         done = terminated or truncated or bool(info["is_success"])
+        saturated += np.abs(info["tau_nm"]) >= limit - 0.05
         if step % every == 0 or done:
             lines.append(
                 f"{step:4d} {obs['ee_pos'][2]:6.3f} {action[2]:6.3f} {action[9]:5.2f} "
@@ -54,7 +58,8 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
                 f"{info['wrench_slow_world'][2]:7.1f} {info['wrench_ext_world'][2]:7.1f} "
                 f"{int(info['gate_open']):5d}")
         step += 1
-    end = f"success: {bool(info['is_success'])} after {step} steps"
+    end = (f"success: {bool(info['is_success'])} after {step} steps; steps ending at a joint "
+           f"torque limit, joints 1-7: {saturated.tolist()}")
     if "in_band_frac" in info:
         end += (f"; writing: force in band {info['in_band_frac']:.0%}, "
                 f"stroke RMS {1e3 * info['stroke_rms_m']:.1f} mm")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import torch
@@ -15,6 +17,7 @@ from impact_envs.control.controller import ImpactController
 from impact_envs.control.fake_dynamics import ConstantArmDynamics
 from impact_envs.control.internal_model import OUTPUT_SCALE
 from impact_envs.control.lie import matrix_to_quat
+from impact_envs.control.presets import preset_config
 from impact_envs.errors import InvalidArgumentError
 
 torch.set_num_threads(1)
@@ -171,11 +174,12 @@ def test_invalid_use() -> None:
         ctrl.reset(np.zeros(6))
 
 
-def _simulate_payload(mode: str, seconds: float, estimator: str = "residual") -> tuple:
+def _simulate_payload(mode: str, seconds: float, estimator: str = "residual",
+                      preset: str = "default") -> tuple:
     """Closed loop on the fake arm: M ddq + C dq + g + b dq = tau + J^T w_ext (semi-implicit
     Euler), a 2.5 kg payload hanging on the TCP from t = 0.2 s."""
     dyn = ConstantArmDynamics(seed=21)
-    cfg = ControllerConfig(estimator=EstimatorConfig(kind=estimator))
+    cfg = replace(preset_config(preset), estimator=EstimatorConfig(kind=estimator))
     ctrl = ImpactController(dyn, cfg, mode=mode)
     q, dq = np.full(7, 0.1), np.zeros(7)
     ctrl.reset(q)
@@ -201,9 +205,20 @@ def _simulate_payload(mode: str, seconds: float, estimator: str = "residual") ->
     return np.array(errors), np.array(gate), ctrl
 
 
+def test_closed_loop_payload_default_preset_removes_sag_within_a_second() -> None:
+    err, gate, ctrl = _simulate_payload("impact", 2.0)
+    # Surprise 2.5 N and no quasi-steady wait: the gate opens while the estimate still rises.
+    assert 0.2 < np.flatnonzero(gate)[0] / 1000.0 < 0.2 + 0.1
+    sag = np.linalg.norm(err, axis=1)
+    assert sag[200:].max() < 0.05  # impedance alone settles at m g / K = 61 mm
+    assert np.all(sag[1200:] < 0.003)  # within 3 mm from 1.0 s after the load appears
+    np.testing.assert_allclose(ctrl.signals.wrench_pred_world[2], 24.5, atol=1.0)
+
+
 def test_closed_loop_payload_impact_removes_sag_impedance_does_not() -> None:
-    err_imp, gate_imp, ctrl_imp = _simulate_payload("impedance", 3.0)
-    err_impact, gate_impact, ctrl = _simulate_payload("impact", 3.0)
+    """The paper preset's timing: a slow filter at 20 N/s and a quasi-steady gate."""
+    err_imp, gate_imp, ctrl_imp = _simulate_payload("impedance", 3.0, preset="paper")
+    err_impact, gate_impact, ctrl = _simulate_payload("impact", 3.0, preset="paper")
     # Impedance only: steady sag ~ m g / k = 24.5 / 400 m along -z (e_z = p_d - p > 0).
     assert err_imp[-1, 2] == pytest.approx(24.5 / 400.0, rel=0.02)
     np.testing.assert_allclose(ctrl_imp.signals.wrench_slow_world[2], 24.5, atol=0.5)

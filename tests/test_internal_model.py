@@ -17,6 +17,7 @@ from impact_envs.control.internal_model import (
     InternalModel,
 )
 from impact_envs.control.internal_model_net import sgd_step
+from impact_envs.control.presets import preset_config
 from impact_envs.control.surprise_gate import SurpriseGate
 from impact_envs.errors import CheckpointError, InvalidArgumentError
 
@@ -83,15 +84,20 @@ def test_learns_constant_payload_when_gate_opens() -> None:
 
 
 def test_gate_stays_closed_below_threshold() -> None:
-    model = InternalModel()
+    model = InternalModel(preset_config("paper").internal_model)
     small = np.array([3.0, 0.0, 3.5, 0.0, 0.0, 0.0])  # |f| = 4.6 N < 5 N
+    pred = _run(model, small, 500)
+    assert model.n_updates == 0 and not model.gate.is_open
+    np.testing.assert_array_equal(pred, 0.0)
+    model = InternalModel()  # default preset: opens at 2.5 N
+    small = np.array([1.5, 0.0, 1.9, 0.0, 0.0, 0.0])  # |f| = 2.42 N
     pred = _run(model, small, 500)
     assert model.n_updates == 0 and not model.gate.is_open
     np.testing.assert_array_equal(pred, 0.0)
 
 
 def test_gate_waits_for_quasi_steady_slow_wrench() -> None:
-    model = InternalModel()
+    model = InternalModel(preset_config("paper").internal_model)
     _run(model, PAYLOAD, 300, slow_rate=0.5)  # w_slow still moving: no learning
     assert model.n_updates == 0 and not model.gate.is_open
     _run(model, PAYLOAD, 10, slow_rate=0.1)

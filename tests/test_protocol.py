@@ -42,12 +42,14 @@ def test_settled_peak_excludes_lift_lag_but_keeps_a_load_sag():
 def test_summary_over_repeats_counts_never_adapted_and_takes_median():
     metrics = pd.DataFrame({
         "controller": ["impact"] * 3, "phase": ["B"] * 3, "success": [True, True, False],
-        "adapt_time_s": [1.0, np.nan, 3.0], "peak_err_z_m": [0.05, 0.06, 0.07],
+        "adapt_time_s": [1.0, np.nan, 3.0], "adapt_liftoff_s": [0.5, np.nan, 1.6],
+        "peak_err_z_m": [0.05, 0.06, 0.07],
         "peak_err_z_settled_m": [0.008, 0.012, 0.009], "steady_err_z_m": [0.01, 0.02, 0.03],
     })
     row = summarize(metrics).iloc[0]
     assert (row["repeats"], row["successes"], row["adapt_never"]) == (3, 2, 1)
     assert row["adapt_time_s_median"] == pytest.approx(2.0)  # over the two that adapted
+    assert row["adapt_liftoff_within_1_5s"] == 1
     assert row["peak_err_z_settled_m_median"] == pytest.approx(0.009)
     assert row["peak_err_z_settled_m_max"] == pytest.approx(0.012)
 
@@ -73,4 +75,7 @@ def test_adapt_time_ignores_lag_behind_a_descending_target():
     row = phase_metrics(ep).iloc[0]
     # settled samples start 1 s after the lift (2.5 s); sag < 1 cm from 1.5 + 0.5 ln 5 = 2.3 s
     assert row["adapt_time_s"] == pytest.approx(2.5 - 1.0, abs=0.04)
+    # from lift-off (1.2 s) over the still stretch before the descent: lift lag + sag < 1 cm
+    # from about 1.5 + 0.5 ln(5.1) = 2.3 s; the descent lag at 4.2 s is outside the stretch
+    assert row["adapt_liftoff_s"] == pytest.approx(2.3 - 1.2, abs=0.06)
     assert row["peak_err_z_m"] > 0.02  # the raw aloft peak still sees the descent lag

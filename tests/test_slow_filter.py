@@ -8,10 +8,13 @@ import numpy as np
 import pytest
 
 from impact_envs.control.config import ControllerConfig, SlowWrenchConfig
+from impact_envs.control.presets import preset_config
 from impact_envs.control.slow_filter import SlowWrenchFilter, step_response_time_s
 from impact_envs.errors import InvalidArgumentError
 
 DT = 0.001
+PAPER = preset_config("paper").slow_wrench
+"""The paper's filter (eta 2 / 1 per s, clip 10 N / 1 Nm): the numbers below are its timing."""
 
 
 def _run(filt: SlowWrenchFilter, wrench: np.ndarray, ticks: int) -> np.ndarray:
@@ -19,7 +22,7 @@ def _run(filt: SlowWrenchFilter, wrench: np.ndarray, ticks: int) -> np.ndarray:
 
 
 def test_large_force_step_is_ramp_then_exponential() -> None:
-    cfg = SlowWrenchConfig()
+    cfg = PAPER
     filt = SlowWrenchFilter(cfg, DT)
     step = np.array([0.0, 0.0, 30.0, 0.0, 0.0, 0.0])
     traj = _run(filt, step, 3000)[:, 2]
@@ -35,7 +38,7 @@ def test_large_force_step_is_ramp_then_exponential() -> None:
 
 
 def test_small_step_is_pure_exponential_per_axis() -> None:
-    filt = SlowWrenchFilter(SlowWrenchConfig(), DT)
+    filt = SlowWrenchFilter(PAPER, DT)
     step = np.array([4.0, 0.0, 0.0, 0.5, 0.0, 0.0])
     traj = _run(filt, step, 1000)
     assert traj[499, 0] == pytest.approx(4.0 * (1 - (1 - 0.002) ** 500), rel=1e-12)
@@ -43,7 +46,7 @@ def test_small_step_is_pure_exponential_per_axis() -> None:
 
 
 def test_clipping_bounds_every_per_tick_change() -> None:
-    filt = SlowWrenchFilter(SlowWrenchConfig(), DT)
+    filt = SlowWrenchFilter(PAPER, DT)
     rng = np.random.default_rng(3)
     prev = filt.wrench_slow_world.copy()
     max_step = np.array([0.02, 0.02, 0.02, 0.001, 0.001, 0.001])
@@ -54,7 +57,7 @@ def test_clipping_bounds_every_per_tick_change() -> None:
 
 
 def test_slow_rate_definition() -> None:
-    filt = SlowWrenchFilter(SlowWrenchConfig(), DT)
+    filt = SlowWrenchFilter(PAPER, DT)
     filt.update(np.array([0.0, 0.0, 50.0, 0.0, 0.0, 0.0]))
     assert filt.slow_rate == pytest.approx(1.0)  # one axis at max slew
     np.testing.assert_allclose(filt.rate_world[:3], [0.0, 0.0, 20.0])

@@ -16,9 +16,9 @@ import numpy as np
 from gymnasium import spaces
 
 from impact_envs.control.config import ControllerConfig, EstimatorConfig
-from impact_envs.control.presets import PRESETS, preset_config, preset_name
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
+from impact_envs.control.presets import PRESETS, preset_config, preset_name
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
 from impact_envs.robot.loop import FusedTicks, control_tick

@@ -62,14 +62,16 @@ class CalligraphyEnv(ImpactEnv):
     0.02–5 kg, the sweep axis; surface_friction default 0.3, range 0.05–1.5), ``estimator``,
     ``sensor_noise``, ``grasp_force_n``, ``model_mass_error``, ``persist_internal_model``,
     ``terminate_on_success``, ``render_mode`` ("rgb_array"), ``width``, ``height``,
-    ``camera``, ``controller_config`` (as for ``IMPACT/Hammer-v0``).
+    ``camera``, ``controller_preset``, ``controller_config`` (as for ``IMPACT/Hammer-v0``).
 
     ## Version history
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
       the normal-axis feedforward hold moved from the task into the controller (held from
       the last unmasked tick instead of the last tick the tip was > 5 mm above the paper);
       pressing engages with the commanded tip within 5 mm of the paper and releases above
-      10 mm (was: on exactly while within 2 mm).
+      10 mm (was: on exactly while within 2 mm). 2026-11-24: while pressing, the learning
+      mask freezes all three force axes (was: z only), and the ``default`` controller preset
+      replaces the paper-literal one (``controller_preset="paper"``).
     """
 
     @classmethod

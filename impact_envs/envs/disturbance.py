@@ -60,11 +60,12 @@ class DisturbanceEnv(ImpactEnv):
     0.3 kg; ranges 0–40 N, 0.05–5 kg, 0–5 kg), ``object_mass`` [kg] (shortcut), ``estimator``,
     ``sensor_noise``, ``grasp_force_n``, ``model_mass_error``, ``persist_internal_model``,
     ``terminate_on_success``, ``render_mode`` ("rgb_array"), ``width``, ``height``,
-    ``camera``, ``controller_config`` (as for ``IMPACT/Hammer-v0``).
+    ``camera``, ``controller_preset``, ``controller_config`` (as for ``IMPACT/Hammer-v0``).
 
     ## Version history
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
-      the disturbance acts only while the trough is held.
+      the disturbance acts only while the trough is held. 2026-11-24: the ``default``
+      controller preset replaces the paper-literal one (``controller_preset="paper"``).
     """
 
     @classmethod

@@ -58,10 +58,14 @@ class DumbbellEnv(ImpactEnv):
     ``grasp_force_n`` (default 70 N), ``model_mass_error`` (relative error of the
     controller's link masses), ``persist_internal_model`` (keep the learned internal model
     across resets), ``terminate_on_success``, ``render_mode`` ("rgb_array"), ``width``,
-    ``height``, ``camera`` ("front" | "side"), ``controller_config`` (a ``ControllerConfig``).
+    ``height``, ``camera`` ("front" | "side"), ``controller_preset`` ("default" | "paper",
+    docs/controller.md; reported as ``info["controller_preset"]``), ``controller_config`` (a
+    ``ControllerConfig``; overrides the preset, reported as its preset's name or "custom").
 
     ## Version history
-    - v0: initial release.
+    - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
+      configuration changed from the paper-literal table (now ``controller_preset="paper"``,
+      which reproduces earlier results episode for episode) to the ``default`` preset.
     """
 
     @classmethod

@@ -6,11 +6,14 @@ While the pen is pressed, the commanded wrench (robot-on-environment sign, world
 
 with ``F(t)`` ramping from 0 to ``force_n`` at ``ramp_n_per_s`` after contact is engaged (a
 gentle landing instead of a 15 N step while the tip may still be a few mm above the paper).
-The command comes with a learning mask that freezes the normal axis. The controller then
-neither learns the pressing force nor lets its feedforward on that axis follow the model's
-prediction: it holds the feedforward of the last unmasked tick (the tool weight learned in
-free air), because the prediction follows input features that pressing changes (the
-estimated wrench moves by −F), which would feed the pressing force back into itself.
+The command comes with a learning mask that freezes the three force axes: the normal force
+is commanded, and the tangential force while writing is the paper's friction drag caused by
+that press (μ F ≈ 4.5 N), which reverses with every change of stroke direction; neither is a
+load to learn. The controller then neither learns these forces nor lets its feedforward on a
+frozen axis follow the model's prediction: it holds the feedforward of the last unmasked tick
+(the tool weight learned in free air), because the prediction follows input features that
+pressing changes (the estimated wrench moves by −F), which would feed the pressing force back
+into itself. Torques stay learnable.
 
 The env passes the returned array to every control tick of the policy step, and ``tick`` runs
 before each of them (``Task.before_tick``), so the ramp acts at 1 kHz.
@@ -20,9 +23,11 @@ from __future__ import annotations
 
 import numpy as np
 
-PRESS_LEARN_MASK = np.array([True, True, False, True, True, True])
-"""Internal-model learning mask while pressing: the normal (z) axis frozen (and its
-feedforward held by the controller)."""
+PRESS_LEARN_MASK = np.array([False, False, False, True, True, True])
+"""Internal-model learning mask while pressing: the force axes frozen (their feedforward held
+by the controller). Until 2026-11-24 only z was frozen; with the ``default`` controller preset,
+which learns ten times faster, the model then chased the direction-dependent drag and the
+expert's stroke error grew from 3.0 to 5.7 mm (docs/envs.md)."""
 
 
 class NormalForceCommand:

@@ -85,6 +85,7 @@ def store_attrs(cfg: CollectConfig, param_name: str) -> dict:
         "param_name": param_name,
         "param_spec": cfg.param_spec(),
         "controller": cfg.controller,
+        "controller_preset": "default",  # gym.make's default; the demos' IMPACT settings
         "expert": {"name": "scripted", "load_compensation": cfg.load_compensation},
         "seed": cfg.seed,
         "post_success_steps": cfg.post_success_steps,

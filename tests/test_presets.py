@@ -1,0 +1,92 @@
+"""Controller presets: the paper-literal table and the shipped default."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import impact_envs  # noqa: F401 - registers the envs
+from impact_envs.control.config import ControllerConfig
+from impact_envs.control.overrides import apply_overrides
+from impact_envs.control.presets import (
+    DEPARTURES,
+    PRESETS,
+    preset_config,
+    preset_name,
+    revert_departures,
+)
+from impact_envs.errors import InvalidArgumentError
+
+
+def test_paper_preset_is_the_papers_table() -> None:
+    cfg = preset_config("paper")
+    assert cfg.slow_wrench.rate_force_per_s == 2.0 and cfg.slow_wrench.rate_torque_per_s == 1.0
+    assert cfg.slow_wrench.clip_force_n == 10.0 and cfg.slow_wrench.clip_torque_nm == 1.0
+    im = cfg.internal_model
+    assert (im.learning_rate, im.surprise_open_n, im.slow_rate_max) == (0.01, 5.0, 0.2)
+    assert im.history_length == 32
+    assert cfg.impedance.stiffness_translational_n_per_m == (400.0, 400.0, 400.0)
+    assert cfg.estimator.lowpass_time_constant_s == 0.0495
+
+
+def test_default_differs_from_paper_exactly_in_the_listed_departures() -> None:
+    default, paper = preset_config("default"), preset_config("paper")
+    assert default == ControllerConfig()
+    changed = set()
+    for section in dataclasses.fields(default):
+        a, b = getattr(default, section.name), getattr(paper, section.name)
+        if dataclasses.is_dataclass(a):
+            changed |= {f"{section.name}.{f.name}" for f in dataclasses.fields(a)
+                        if getattr(a, f.name) != getattr(b, f.name)}
+    assert changed == set(DEPARTURES)
+    assert revert_departures(default, DEPARTURES) == paper
+    for key in DEPARTURES:  # each revert alone changes exactly one field
+        one = revert_departures(default, [key])
+        assert one != default and preset_name(one) == "custom"
+
+
+def test_preset_names_and_errors() -> None:
+    assert [preset_name(preset_config(n)) for n in PRESETS] == list(PRESETS)
+    assert preset_name(apply_overrides(ControllerConfig(), ["slow_wrench.clip_force_n=3"])) == (
+        "custom")
+    with pytest.raises(InvalidArgumentError, match="valid choices: default, paper"):
+        preset_config("fast")
+    with pytest.raises(InvalidArgumentError, match="valid choices"):
+        revert_departures(ControllerConfig(), ["impedance.stiffness_translational_n_per_m"])
+
+
+def test_env_kwarg_selects_the_preset_and_info_reports_it() -> None:
+    for name in PRESETS:
+        env = gym.make("IMPACT/Hammer-v0", controller_preset=name)
+        _, info = env.reset(seed=0)
+        assert env.unwrapped.controller.config == preset_config(name)
+        assert info["controller_preset"] == name
+        env.close()
+    custom = apply_overrides(ControllerConfig(), ["internal_model.learning_rate=0.02"])
+    env = gym.make("IMPACT/Hammer-v0", controller_config=custom)
+    assert env.reset(seed=0)[1]["controller_preset"] == "custom"
+    env.close()
+    with pytest.raises(InvalidArgumentError, match="valid choices: default, paper"):
+        gym.make("IMPACT/Hammer-v0", controller_preset="literal")
+
+
+def test_warm_start_loads_the_given_weights_at_every_reset() -> None:
+    env = gym.make("IMPACT/Hammer-v0")
+    model = env.unwrapped.controller.internal_model
+    fresh = model.weights()
+    warm = {k: v + 0.01 for k, v in fresh.items()}
+    env.unwrapped.warm_start(warm)
+    for seed in (0, 1):
+        env.reset(seed=seed)
+        for k, v in model.weights().items():
+            np.testing.assert_array_equal(v.numpy(), warm[k].numpy())
+        with np.errstate(all="ignore"):
+            model.net[0].weight.data.add_(1.0)  # what learning in an episode would change
+    env.unwrapped.warm_start(None)
+    env.reset(seed=0)
+    for k, v in model.weights().items():
+        np.testing.assert_array_equal(v.numpy(), fresh[k].numpy())
+    env.close()
