@@ -3,7 +3,8 @@
 One run measures, on the same scene and the same scripted-expert trajectory:
 
 1. the full env (1 kHz controller + sensing + physics, 30 Hz expert policy) with
-   ``controller="impedance"`` and ``controller="impact"``;
+   ``controller="impedance"``, ``controller="impact"`` (``default`` preset) and
+   ``controller="impact"`` with the ``paper`` preset;
 2. raw ``mj_step`` replaying the exact actuator commands recorded in the IMPACT run, from the
    same initial state (pure physics cost of that trajectory).
 
@@ -43,9 +44,16 @@ class Timing:
         self.wall_s, self.cpu_s = min(self.wall_s, wall_s), min(self.cpu_s, cpu_s)
 
 
-def _run_env(env_id: str, controller: str, steps: int, seed: int, mass: float):
+RUNS = {"impedance": ("impedance", "default"), "impact": ("impact", "default"),
+        "impact_paper": ("impact", "paper")}
+"""Row label -> (env ``controller``, ``controller_preset``)."""
+
+
+def _run_env(env_id: str, run: str, steps: int, seed: int, mass: float):
     """One episode prefix; returns (env, wall s, cpu s, start state, ctrl of every tick)."""
-    env = gym.make(env_id, controller=controller, object_mass=mass).unwrapped
+    controller, preset = RUNS[run]
+    env = gym.make(env_id, controller=controller, controller_preset=preset,
+                   object_mass=mass).unwrapped
     expert = make_expert(env_id)
     obs, _ = env.reset(seed=seed)
     expert.reset(1)
@@ -137,7 +145,7 @@ def _print_table(args: argparse.Namespace, rtf: dict[str, Timing], n_ticks: int)
     header = f"{'run':<28}{'real-time factor':>18}{'vs raw mj_step':>16}"
     print(f"{header}{'CPU-time RTF':>15}{'vs raw':>9}")
     rows = [("raw mj_step (replay)", raw)] + [
-        (f"env, controller={c}", rtf[c]) for c in ("impedance", "impact")
+        (f"env, {c}", rtf[c]) for c in RUNS
     ]
     for name, t in rows:
         print(
@@ -162,15 +170,16 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--repeat", type=int, default=3, help="runs of each kind; best kept")
     parser.add_argument("--stages", action="store_true", help="also print per-stage costs")
     args = parser.parse_args(argv)
-    rtf = {k: Timing() for k in ("impedance", "impact", "raw")}
+    rtf = {k: Timing() for k in (*RUNS, "raw")}
     for _ in range(max(1, args.repeat)):
-        for controller in ("impedance", "impact"):
-            env, wall, cpu, start, log = _run_env(
-                args.env, controller, args.steps, args.seed, args.mass
-            )
-            rtf[controller].add(wall, cpu)
-        rtf["raw"].add(*_replay_raw(env, start, log))
-    _print_table(args, rtf, len(log))
+        replay = None
+        for run in RUNS:
+            env, wall, cpu, start, log = _run_env(args.env, run, args.steps, args.seed, args.mass)
+            rtf[run].add(wall, cpu)
+            if run == "impact":
+                replay = (env, start, log)
+        rtf["raw"].add(*_replay_raw(*replay))
+    _print_table(args, rtf, len(replay[2]))
     if args.stages:
         print(f"per-call CPU cost [us] at step {args.steps // 2} of the IMPACT run (best of 5):")
         for name, us in _stage_costs(args.env, args.seed, args.mass, args.steps // 2).items():

@@ -94,7 +94,7 @@ class Worker:
         self.cfg = cfg
         self.envs: dict[tuple[str, str], list[object]] = {}
         self.policies: dict[str, Policy] = {}
-        self.warm: dict[tuple[str, float], dict[str, object]] = {}
+        self.warm: dict[tuple[str, float], object] = {}
 
     def _envs(self, spec: MethodSpec, n: int) -> list[object]:
         """At least ``n`` envs of the method's (controller, preset)."""
@@ -121,11 +121,11 @@ class Worker:
 
         spec = resolve_method(task.method)
         envs = self._envs(spec, len(task.jobs))
-        weights = self._warm_weights(spec, task.value) if spec.warm else None
+        snapshot = self._warm_snapshot(spec, task.value) if spec.warm else None
         for env in envs:
             warm_start = getattr(env.unwrapped, "warm_start", None)  # type: ignore[attr-defined]
             if callable(warm_start):
-                warm_start(weights)
+                warm_start(snapshot)
         batch = LockstepBatch(
             envs, self._policy(task.method), self.cfg.param_name, self.cfg.policy_dt
         )
@@ -146,8 +146,8 @@ class Worker:
 
         batch.run(task.jobs, on_finish, heartbeat)
 
-    def _warm_weights(self, spec: MethodSpec, value: float) -> dict[str, object]:
-        """Internal-model weights after the cell's unscored warm-up episode (cached).
+    def _warm_snapshot(self, spec: MethodSpec, value: float) -> object:
+        """Internal model (weights, replay) after the cell's unscored warm-up episode (cached).
 
         The warm-up episode runs alone (a batch of one, fresh internal model) with its own
         seed, ``episode_seed(seed, value_index, WARMUP_EPISODE)``, so every worker that runs a
@@ -162,7 +162,7 @@ class Worker:
                                   self.cfg.policy_dt)
             batch.run([EpisodeJob(value, seed, WARMUP_EPISODE)], lambda i, m: None)
             model = env.unwrapped.controller.internal_model  # type: ignore[attr-defined]
-            self.warm[key] = model.weights()
+            self.warm[key] = model.snapshot()
         return self.warm[key]
 
     def close(self) -> None:

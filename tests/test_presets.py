@@ -7,6 +7,7 @@ import dataclasses
 import gymnasium as gym
 import numpy as np
 import pytest
+import torch
 
 import impact_envs  # noqa: F401 - registers the envs
 from impact_envs.control.config import ControllerConfig
@@ -73,20 +74,26 @@ def test_env_kwarg_selects_the_preset_and_info_reports_it() -> None:
         gym.make("IMPACT/Hammer-v0", controller_preset="literal")
 
 
-def test_warm_start_loads_the_given_weights_at_every_reset() -> None:
+def test_warm_start_restores_weights_and_replay_at_every_reset() -> None:
     env = gym.make("IMPACT/Hammer-v0")
     model = env.unwrapped.controller.internal_model
-    fresh = model.weights()
-    warm = {k: v + 0.01 for k, v in fresh.items()}
+    fresh = model.snapshot()
+    with torch.no_grad():
+        model.net[0].weight.add_(0.01)
+    model.replay.add(np.ones(model.input_dim), np.full(6, 0.5), np.ones(6))
+    warm = model.snapshot()
     env.unwrapped.warm_start(warm)
     for seed in (0, 1):
         env.reset(seed=seed)
-        for k, v in model.weights().items():
-            np.testing.assert_array_equal(v.numpy(), warm[k].numpy())
-        with np.errstate(all="ignore"):
-            model.net[0].weight.data.add_(1.0)  # what learning in an episode would change
+        assert model.replay.count == 1 and model.replay.targets[0, 0] == 0.5
+        for k, v in model.net.state_dict().items():
+            np.testing.assert_array_equal(v.numpy(), warm.weights[k].numpy())
+        with torch.no_grad():
+            model.net[0].weight.add_(1.0)  # what learning in an episode would change
+        model.replay.add(np.zeros(model.input_dim), np.zeros(6), np.ones(6))
     env.unwrapped.warm_start(None)
     env.reset(seed=0)
-    for k, v in model.weights().items():
-        np.testing.assert_array_equal(v.numpy(), fresh[k].numpy())
+    assert model.replay.count == 0
+    for k, v in model.net.state_dict().items():
+        np.testing.assert_array_equal(v.numpy(), fresh.weights[k].numpy())
     env.close()

@@ -13,7 +13,7 @@ without copying.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -45,6 +45,14 @@ __all__ = [
     "InternalModel",
     "build_network",
 ]
+
+
+@dataclass(frozen=True)
+class ModelSnapshot:
+    """What an ``InternalModel`` has learned: network weights and the replay buffer."""
+
+    weights: dict[str, torch.Tensor]
+    replay: ReplayBuffer
 
 
 class InternalModel:
@@ -250,14 +258,26 @@ class InternalModel:
         return loss
 
     # ----------------------------------------------------------------- persistence
-    def weights(self) -> dict[str, torch.Tensor]:
-        """A copy of the network's weights (``load_weights`` restores them)."""
-        return {k: v.detach().clone() for k, v in self.net.state_dict().items()}
+    def snapshot(self) -> ModelSnapshot:
+        """A copy of what the model has learned: weights and replay samples."""
+        replay = ReplayBuffer(self.replay.capacity, self.input_dim, 6, seed=self.config.seed)
+        replay.copy_from(self.replay)
+        weights = {k: v.detach().clone() for k, v in self.net.state_dict().items()}
+        return ModelSnapshot(weights, replay)
 
-    def load_weights(self, weights: dict[str, torch.Tensor]) -> None:
-        """Set the network's weights in place (a copy of ``weights``, same shapes required)."""
-        self.net.load_state_dict(weights)
+    def restore(self, snapshot: ModelSnapshot) -> None:
+        """Set weights and replay samples to (copies of) ``snapshot``'s; clear the history.
+
+        Raises:
+            CheckpointError: The snapshot comes from a model of another shape.
+        """
+        try:
+            self.net.load_state_dict(snapshot.weights)
+            self.replay.copy_from(snapshot.replay)
+        except (RuntimeError, ValueError) as exc:
+            raise CheckpointError(f"internal model snapshot does not fit: {exc}") from None
         self.refresh_fast_path()
+        self.reset_history()
 
     def save(self, path: str | Path) -> Path:
         """Write weights to ``path`` (.safetensors) and the config to the same stem + .json."""

@@ -32,6 +32,14 @@ class ReplayBuffer:
         self._head = 0
         self._rng = np.random.default_rng(self._seed)
 
+    def copy_from(self, other: ReplayBuffer) -> None:
+        """Hold a copy of ``other``'s samples (same shapes); the sampler is reseeded."""
+        self.clear()
+        self.inputs[:] = other.inputs
+        self.targets[:] = other.targets
+        self.masks[:] = other.masks
+        self.count, self._head = other.count, other._head
+
     def add(self, x: np.ndarray, target: np.ndarray, mask: np.ndarray) -> None:
         """Store one sample (copied)."""
         i = self._head

@@ -17,6 +17,7 @@ from gymnasium import spaces
 
 from impact_envs.control.config import ControllerConfig, EstimatorConfig
 from impact_envs.control.controller import ImpactController
+from impact_envs.control.internal_model import ModelSnapshot
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.control.presets import PRESETS, preset_config, preset_name
 from impact_envs.errors import InvalidArgumentError, check_choice
@@ -100,7 +101,7 @@ class ImpactEnv(gym.Env):
         self.controller_preset = controller_preset if controller_config is None else (
             preset_name(cfg))
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
-        self._warm_weights: dict[str, Any] | None = None
+        self._warm: ModelSnapshot | None = None
         self._camera = camera
         self._size = (int(height), int(width))
         self._renderer: mujoco.Renderer | None = None
@@ -143,15 +144,14 @@ class ImpactEnv(gym.Env):
         """Persistently set a task parameter (used by resets without options)."""
         self._params[name] = self.task.param(name).validate(value)
 
-    def warm_start(self, weights: dict[str, Any] | None) -> None:
-        """Start every later episode's internal model from ``weights`` (``None``: fresh).
+    def warm_start(self, snapshot: ModelSnapshot | None) -> None:
+        """Start every later episode's internal model from ``snapshot`` (``None``: fresh).
 
-        ``weights`` as returned by ``controller.internal_model.weights()`` (e.g. after an
-        unscored warm-up episode): each ``reset`` loads a copy, with an empty replay buffer,
-        so scored episodes stay independent of one another ("warm robot", docs/eval.md).
+        ``snapshot`` as returned by ``controller.internal_model.snapshot()`` (weights and replay
+        samples, e.g. after an unscored warm-up episode): each ``reset`` restores a copy, so
+        scored episodes stay independent of one another ("warm robot", docs/eval.md).
         """
-        self._warm_weights = None if weights is None else {
-            k: v.clone() for k, v in weights.items()}
+        self._warm = snapshot
 
     def set_object_mass(self, mass_kg: float) -> None:
         """Persistently set the object mass [kg]."""
@@ -171,8 +171,8 @@ class ImpactEnv(gym.Env):
         sim.reset_robot(q0, 0.04, rng)
         mujoco.mj_forward(sim.model, sim.data)
         self.controller.reset(q0, keep_internal_model=self.persist_internal_model)
-        if self._warm_weights is not None:
-            self.controller.internal_model.load_weights(self._warm_weights)
+        if self._warm is not None:
+            self.controller.internal_model.restore(self._warm)
         self.dynamics.update(q0, np.zeros(7))
         self._target_pos = self.dynamics.pos_ee_world.copy()
         self._target_quat = matrix_to_quat(self.dynamics.rot_ee_world)
