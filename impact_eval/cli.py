@@ -27,15 +27,16 @@ QUICK_DEFAULTS = {
 
 
 def quick_methods(env_id: str) -> str:
-    """The learned methods when their checkpoints ship with the package, else scripted ones."""
+    """The learned methods when their checkpoints ship with the package, else scripted ones;
+    IMPACT with both controller presets (``default`` and the paper-literal ``paper``)."""
     from impact_eval.methods import checkpoint_dir
 
     try:
         for variant in ("vanilla", "augmented"):
             checkpoint_dir(env_id, variant)
     except ImpactError:
-        return "scripted,scripted_impact"
-    return "vanilla_dp,augmented_dp,impact"
+        return "scripted,scripted_impact,scripted_impact_paper"
+    return "vanilla_dp,augmented_dp,impact,impact_paper"
 
 
 class _Parser(argparse.ArgumentParser):
