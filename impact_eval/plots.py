@@ -25,6 +25,10 @@ METHOD_LABELS = {
     "vanilla_dp": "Vanilla DP",
     "augmented_dp": "Augmented DP",
     "impact": "IMPACT (ours)",
+    "impact_warm": "IMPACT, warm robot",
+    "impact_paper": "IMPACT, paper preset",
+    "impact_vanilla": "IMPACT, Vanilla ckpt",
+    "scripted_impact_paper": "Scripted + IMPACT (paper)",
 }
 PARAM_UNITS = {"mass": "kg", "force": "N", "length": "m", "stiffness": "N/m", "time": "s"}
 FORMATS = ("png", "pdf")
