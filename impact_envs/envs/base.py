@@ -37,6 +37,16 @@ def ticks_for_step(k: int) -> int:
     return (k + 1) * CONTROL_HZ // POLICY_HZ - k * CONTROL_HZ // POLICY_HZ
 
 
+def _controller_config(preset: str, estimator: str,
+                       config: ControllerConfig | None) -> tuple[ControllerConfig, str]:
+    """The env's controller config and its preset name: ``preset`` with the ``estimator``
+    kind, or ``config`` as given (named after the preset it equals, else "custom")."""
+    if config is not None:
+        return config, preset_name(config)
+    cfg = dataclasses.replace(preset_config(preset), estimator=EstimatorConfig(kind=estimator))
+    return cfg, preset
+
+
 class ImpactEnv(gym.Env):
     """Shared machinery of the IMPACT environments; each task subclass documents itself."""
 
@@ -92,15 +102,10 @@ class ImpactEnv(gym.Env):
             self._params[name] = task.param(name).validate(value)
         perturbation = ModelPerturbation(link_mass_scale=1.0 + float(model_mass_error))
         self.dynamics = PinocchioArm(perturbation=perturbation)
-        if controller_config is None:
-            cfg = preset_config(controller_preset)
-            cfg = dataclasses.replace(cfg, estimator=EstimatorConfig(kind=estimator))
-        else:
-            cfg = controller_config
-        self.controller = ImpactController(self.dynamics, cfg, mode=controller)
-        self.controller_preset = controller_preset if controller_config is None else (
-            preset_name(cfg))
+        cfg, self.controller_preset = _controller_config(controller_preset, estimator,
+                                                         controller_config)
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
+        self.controller = ImpactController(self.dynamics, cfg, mode=controller)
         self._warm: ModelSnapshot | None = None
         self._camera = camera
         self._size = (int(height), int(width))
