@@ -24,10 +24,6 @@ from impact_eval.rollout import EpisodeJob, LockstepBatch
 
 RowSink = Callable[[dict[str, object]], None]
 
-WARMUP_EPISODE = 2**20
-"""Episode index whose seed drives a cell's unscored warm-up episode (no scored episode
-of a sweep reaches it)."""
-
 
 class SweepError(ImpactError):
     """The sweep could not finish (a worker died or failed outside an episode)."""
@@ -147,22 +143,14 @@ class Worker:
         batch.run(task.jobs, on_finish, heartbeat)
 
     def _warm_snapshot(self, spec: MethodSpec, value: float) -> object:
-        """Internal model (weights, replay) after the cell's unscored warm-up episode (cached).
+        """The cell's warm-up snapshot (``warm.warm_up``), computed once per worker."""
+        from impact_eval.warm import warm_up
 
-        The warm-up episode runs alone (a batch of one, fresh internal model) with its own
-        seed, ``episode_seed(seed, value_index, WARMUP_EPISODE)``, so every worker that runs a
-        part of the cell computes the same weights.
-        """
         key = (spec.name, value)
         if key not in self.warm:
-            env = self._envs(spec, 1)[0]
-            env.unwrapped.warm_start(None)  # type: ignore[attr-defined]
-            seed = episode_seed(self.cfg.seed, self.cfg.values.index(value), WARMUP_EPISODE)
-            batch = LockstepBatch([env], self._policy(spec.name), self.cfg.param_name,
-                                  self.cfg.policy_dt)
-            batch.run([EpisodeJob(value, seed, WARMUP_EPISODE)], lambda i, m: None)
-            model = env.unwrapped.controller.internal_model  # type: ignore[attr-defined]
-            self.warm[key] = model.snapshot()
+            self.warm[key] = warm_up(self._envs(spec, 1)[0], self._policy(spec.name),
+                                     self.cfg.param_name, self.cfg.policy_dt, self.cfg.seed,
+                                     self.cfg.values.index(value), value)
         return self.warm[key]
 
     def close(self) -> None:
