@@ -200,3 +200,14 @@ def test_sgd_step_matches_autograd() -> None:
     assert loss == pytest.approx(float(expected_loss.detach()), rel=1e-6)
     for p, p_ref in zip(model.net.parameters(), reference.parameters(), strict=True):
         np.testing.assert_allclose(p.detach().numpy(), p_ref.detach().numpy(), atol=1e-7)
+
+
+def test_wrench_feature_off_hides_the_estimated_wrench_from_the_network() -> None:
+    model = InternalModel(InternalModelConfig(wrench_feature=False))
+    q, dq, p = np.full(7, 0.2), np.zeros(7), np.array([0.5, 0.0, 0.3])
+    model.push(q, dq, 0.03, p, np.array([0.0, 0.0, 40.0, 0.0, 0.0, 1.0]))
+    with_load = model.history_input().copy()
+    model.reset_history()
+    model.push(q, dq, 0.03, p, np.zeros(6))
+    np.testing.assert_array_equal(model.history_input(), with_load)  # same input either way
+    assert InternalModel().config.wrench_feature  # both presets see it

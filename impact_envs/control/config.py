@@ -171,6 +171,9 @@ class InternalModelConfig:
         replay_capacity: FIFO capacity of the replay buffer [samples] (own choice: 256).
         replay_period: Ticks between stored quasi-steady samples (own choice: 10, i.e. 10 ms).
         seed: Seed of the weight initialisation and of replay sampling.
+        wrench_feature: Feed the estimated wrench to the network (default True, as both
+            presets). False zeroes those six inputs, so the model predicts from the robot's
+            state (joints, gripper, TCP position) alone; an experiment, docs/results.md §1.
     """
 
     history_length: int = 32
@@ -184,6 +187,7 @@ class InternalModelConfig:
     replay_capacity: int = 256
     replay_period: int = 10
     seed: int = 0
+    wrench_feature: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "hidden_sizes", tuple(int(h) for h in self.hidden_sizes))

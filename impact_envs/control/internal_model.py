@@ -101,6 +101,8 @@ class InternalModel:
         offset, inv_scale, hist = kernels.model32_views(self._buf32, F)
         offset[:] = FEATURE_OFFSET
         inv_scale[:] = 1.0 / FEATURE_SCALE
+        if not cfg.wrench_feature:  # the estimated-wrench inputs then read 0 on every tick
+            inv_scale[np.asarray(FEATURE_NAMES) == "w_ext"] = 0.0
         # History stored twice (rows h and h + L) so the window oldest..newest is contiguous.
         self._hist = hist.reshape(2 * L, F)
         self._windows = [self._hist[h + 1 : h + 1 + L].reshape(-1) for h in range(L)]
