@@ -53,19 +53,15 @@ class DumbbellEnv(ImpactEnv):
     ``terminate_on_success=True``. ``SimulationError`` if the physics diverges.
 
     ## Arguments
-    ``controller`` ("impact" | "impedance"), ``object_mass`` [kg] (default 2.5, range
-    0.1–12), ``estimator`` ("residual" | "momentum"), ``sensor_noise`` (bool),
-    ``grasp_force_n`` (default 70 N), ``model_mass_error`` (relative error of the
-    controller's link masses), ``persist_internal_model`` (keep the learned internal model
-    across resets), ``terminate_on_success``, ``render_mode`` ("rgb_array"), ``width``,
-    ``height``, ``camera`` ("front" | "side"), ``controller_preset`` ("default" | "paper",
-    docs/controller.md; reported as ``info["controller_preset"]``), ``controller_config`` (a
-    ``ControllerConfig``; overrides the preset, reported as its preset's name or "custom").
+    As for ``IMPACT/Hammer-v0`` (``controller``, ``controller_preset``, ``controller_config``,
+    ``estimator``, ``sensor_noise``, ``grasp_force_n``, ``model_mass_error``,
+    ``persist_internal_model``, ``terminate_on_success``, ``render_mode``, ``width``,
+    ``height``, ``camera``), with ``object_mass`` [kg] defaulting to 2.5 (range 0.1–12).
 
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
       configuration changed from the paper-literal table (now ``controller_preset="paper"``,
-      which reproduces earlier results episode for episode) to the ``default`` preset.
+      equal to the earlier defaults field for field) to the ``default`` preset.
     """
 
     @classmethod

@@ -61,7 +61,7 @@ class HammerEnv(ImpactEnv):
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
       configuration changed from the paper-literal table (now ``controller_preset="paper"``,
-      which reproduces earlier results episode for episode) to the ``default`` preset.
+      equal to the earlier defaults field for field) to the ``default`` preset.
     """
 
     @classmethod
