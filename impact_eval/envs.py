@@ -59,11 +59,15 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
     IMPACT envs end an episode at success (``terminate_on_success=True``): success is then
     final, and a sweep does not spend the remaining steps of solved episodes. ``overrides``
     (``SECTION.FIELD=VALUE``, ``control.overrides``) change the controller's config from the
-    preset's values, for ablations. Envs outside the IMPACT namespace get no preset argument.
+    preset's values, for ablations. Envs outside the IMPACT namespace (plugins) get the preset
+    argument only when it is not ``"default"``, so a plugin env that cannot take it fails in one
+    line instead of silently running another configuration.
     """
     extra: dict[str, object] = {}
     if env_id.split(":")[-1].startswith("IMPACT/"):
         extra["terminate_on_success"] = True
+        extra["controller_preset"] = preset
+    elif preset != "default":
         extra["controller_preset"] = preset
     if overrides:
         from impact_envs.control.overrides import apply_overrides

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+import pytest
 
 from impact_envs.errors import InvalidArgumentError, SimulationError
 from impact_eval.methods import MethodSpec, register_method
@@ -163,3 +164,13 @@ def test_fake_env_success_depends_on_mass_and_controller() -> None:
             rates[controller, mass] = wins / 40
     assert rates["impedance", 0.5] > rates["impedance", 8.0]
     assert rates["impact", 8.0] > rates["impedance", 8.0]
+
+
+def test_a_preset_a_plugin_env_cannot_take_is_a_one_line_error() -> None:
+    from impact_envs.errors import InvalidArgumentError
+    from impact_eval.envs import make_env
+
+    make_env(ENV_ID, "impact").close()  # the default preset needs no argument
+    with pytest.raises(InvalidArgumentError, match="controller_preset") as err:
+        make_env(ENV_ID, "impact", preset="paper")  # not silently run with another config
+    assert "\n" not in str(err.value)
