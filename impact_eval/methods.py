@@ -7,6 +7,7 @@ machinery tested) without the scripted experts, diffusion policies or Stable-Bas
 |-------------------|------------------------------------------|-------------|
 | `scripted`        | scripted expert                          | `impedance` |
 | `scripted_impact` | scripted expert                          | `impact`    |
+| `scripted_closed_loop` | scripted expert, closed-loop sag compensation | `impedance` |
 | `vanilla_dp`      | DP checkpoint `<env>/vanilla`            | `impedance` |
 | `augmented_dp`    | DP checkpoint `<env>/augmented`          | `impedance` |
 | `impact`          | DP checkpoint `<env>/impact`, else `<env>/vanilla` | `impact` |
@@ -122,14 +123,21 @@ def checkpoint_dir(env_id: str, variant: str) -> Path:
     return path
 
 
-def _build_scripted(env_id: str, env: gym.Env) -> Policy:
-    """Scripted expert of the env, without load compensation (the controller's job)."""
-    try:
-        from impact_envs.policies.scripted import make_expert
+def _scripted_factory(compensation: str) -> PolicyFactory:
+    """Factory of the env's scripted expert with the given ``compensation`` mode."""
 
-        return make_expert(env_id, load_compensation=False)
-    except ImportError as exc:
-        raise InvalidArgumentError(f"no scripted experts available: {exc}") from None
+    def build(env_id: str, env: gym.Env) -> Policy:
+        try:
+            from impact_envs.policies.scripted import make_expert
+        except ImportError as exc:
+            raise InvalidArgumentError(f"no scripted experts available: {exc}") from None
+        return make_expert(env_id, compensation=compensation)
+
+    return build
+
+
+_build_scripted = _scripted_factory("none")
+"""Scripted expert without load compensation (the controller's job)."""
 
 
 def _dp_factory(variant: str) -> PolicyFactory:
@@ -200,6 +208,9 @@ def load_sb3(path: str, env: gym.Env) -> SB3Policy:
 for _spec in (
     MethodSpec("scripted", "impedance", _build_scripted, "scripted expert, impedance control"),
     MethodSpec("scripted_impact", "impact", _build_scripted, "scripted expert, IMPACT control"),
+    MethodSpec("scripted_closed_loop", "impedance", _scripted_factory("closed_loop"),
+               "scripted expert compensating the sag in closed loop (the Augmented "
+               "demonstrator), impedance control"),
     MethodSpec("vanilla_dp", "impedance", _dp_factory("vanilla"), "Vanilla DP, impedance"),
     MethodSpec("augmented_dp", "impedance", _dp_factory("augmented"), "Augmented DP, impedance"),
     MethodSpec("impact", "impact", _build_impact_dp,

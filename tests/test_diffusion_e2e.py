@@ -124,10 +124,10 @@ def test_collect_cli(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(collect_module, "default_expert_factory", lambda cfg: FakeExpert)
     out = tmp_path / "cli.zarr"
     argv = ["--env", FAKE_ID, "--out", str(out), "--episodes", "2", "--mass", "0.2"]
-    collect_module.main([*argv, "--n-envs", "2", "--no-progress", "--load-compensation"])
+    collect_module.main([*argv, "--n-envs", "2", "--no-progress", "--compensation", "closed_loop"])
     assert "2 demos" in capsys.readouterr().out
     attrs = load_replay(out).attrs
-    assert attrs["expert"]["load_compensation"] is True
+    assert attrs["expert"]["compensation"] == "closed_loop"
     assert attrs["param_spec"] == {"mode": "fixed", "values": [0.2]}
     with pytest.raises(SystemExit) as exc:
         collect_module.main([*argv, "--no-progress"])
@@ -140,8 +140,10 @@ def test_collect_cli(tmp_path, monkeypatch, capsys):
     (["--env", "Foo/Bar-v0"], "valid: IMPACT/Hammer-v0"),
     (["--env", "IMPACT/Hammer-v0", "--controller", "pid"], "valid choices: impedance, impact"),
     (["--env", "IMPACT/Hammer-v0", "--mass-range", "3"], "LO:HI"),
-    (["--env", "IMPACT/Calligraphy-v0", "--load-compensation"], "load_compensation=False"),
-    (["--env", "IMPACT/Disturbance-v0", "--load-compensation"], "load_compensation=False"),
+    (["--env", "IMPACT/Hammer-v0", "--compensation", "psychic"],
+     "valid choices: none, closed_loop, privileged"),
+    (["--env", "IMPACT/Calligraphy-v0", "--compensation", "closed_loop"], "compensation='none'"),
+    (["--env", "IMPACT/Disturbance-v0", "--compensation", "closed_loop"], "compensation='none'"),
 ])
 def test_collect_cli_bad_input_is_one_line(tmp_path, capsys, extra, needle):
     with pytest.raises(SystemExit) as exc:

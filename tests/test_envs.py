@@ -136,8 +136,8 @@ def test_registered_episode_length_matches_task(env_id):
     env.close()
 
 
-def test_expert_load_compensation_raises_targets_by_mg_over_k():
-    expert = make_expert("IMPACT/Hammer-v0", load_compensation=True)
+def test_expert_privileged_compensation_raises_targets_by_mg_over_k():
+    expert = make_expert("IMPACT/Hammer-v0", compensation="privileged")
     with pytest.raises(InvalidArgumentError, match="object_mass_kg"):
         expert.reset(1)
     env = gym.make("IMPACT/Hammer-v0", object_mass=4.0)
@@ -154,6 +154,27 @@ def test_expert_load_compensation_raises_targets_by_mg_over_k():
             break
     else:
         pytest.fail("expert never reached the lift phase")
+
+
+def test_expert_closed_loop_compensation_finds_the_sag_without_the_mass():
+    """Under plain impedance (K_z = 400 N/m) a 4 kg hammer sags m g / K = 9.8 cm; the
+    closed-loop expert, told no mass, lifts it and carries it with an offset near that sag."""
+    env = gym.make("IMPACT/Hammer-v0", object_mass=4.0, controller="impedance")
+    obs, _ = env.reset(seed=0)
+    expert = make_expert("IMPACT/Hammer-v0", compensation="closed_loop")
+    expert.reset(1)
+    offsets = []
+    for _ in range(400):
+        action = expert.act(stack_obs([obs]))[0]
+        obs, *_ = env.step(action)
+        if expert.phase[0] == 4:  # CARRY: the hammer is up
+            offsets.append(expert.offset_z[0])
+    env.close()
+    sag_m = 4.0 * 9.81 / 400.0
+    assert len(offsets) > 10
+    assert offsets[-1] == pytest.approx(sag_m, rel=0.25)
+    with pytest.raises(InvalidArgumentError, match="valid choices: none, closed_loop"):
+        make_expert("IMPACT/Hammer-v0", compensation="psychic")
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)

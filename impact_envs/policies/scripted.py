@@ -6,9 +6,17 @@ toward the current waypoint at a bounded speed. A phase ends when its condition 
 (e.g. the object has actually risen) or after a timeout, so under plain impedance a heavy
 object that sags simply runs into the timeout — exactly what a fixed demonstrator would do.
 
-With ``load_compensation`` the expert knows the object mass (privileged) and raises its
-targets by ``m g / K_z`` while holding the object: the overshooting targets a teleoperator
-produces under plain impedance (used for the Augmented-DP demonstrations).
+``compensation`` chooses how the expert meets a load's sag under plain impedance:
+
+- ``"none"``: it commands the nominal waypoints (the sag is the controller's business).
+- ``"closed_loop"``: as a teleoperator does, with no knowledge of the mass. While it holds
+  the object and its nominal target is vertically still, it integrates the observed TCP height
+  error into a height offset added to its commands (``lift_gain_per_s``), so it raises its
+  command as far as the sag it sees; the offset is dropped at release. Used for the
+  Augmented-DP demonstrations (docs/diffusion_policy.md).
+- ``"privileged"``: an ablation only. It knows the mass and adds ``m g / K_z`` from the start
+  of the lift, so in its demos every mass moves alike and the state does not tell how far to
+  overshoot (the former Augmented demonstrator, docs/results.md §1).
 """
 
 from __future__ import annotations
@@ -19,10 +27,12 @@ import gymnasium as gym
 import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
-from impact_envs.errors import InvalidArgumentError
+from impact_envs.errors import InvalidArgumentError, check_choice
 
 GRAVITY = 9.81
 OPEN, CLOSED = -1.0, 1.0
+COMPENSATIONS = ("none", "closed_loop", "privileged")
+"""Valid ``compensation`` modes of the pick-and-place expert (module docstring)."""
 
 # phases
 APPROACH, DESCEND, GRASP, LIFT, CARRY, LOWER, RELEASE, RETREAT = range(8)
@@ -45,6 +55,9 @@ class PickPlaceSpec:
         lift_margin_m: the object counts as lifted when its height rose by ``carry_z -
             grasp_z - lift_margin_m``.
         stiffness_z_n_per_m: impedance stiffness used for the privileged load compensation.
+        lift_gain_per_s: integral gain of the closed-loop compensation: the height offset grows
+            by this times the TCP height error per second [1/s].
+        max_offset_m: bound of the closed-loop height offset, ``[0, max_offset_m]`` [m].
         timeouts_steps: per-phase timeouts at 30 Hz.
         carry_dwell_steps: with > 0, the carry ends only after the target has rested this many
             steps at the carry waypoint above the goal (the carry timeout grows by as much):
@@ -62,6 +75,8 @@ class PickPlaceSpec:
     reach_tol_m: float = 0.015
     lift_margin_m: float = 0.04
     stiffness_z_n_per_m: float = 400.0
+    lift_gain_per_s: float = 3.0
+    max_offset_m: float = 0.3
     timeouts_steps: tuple[int, ...] = (90, 60, 18, 450, 150, 120, 15, 10_000)
     carry_dwell_steps: int = 0
 
@@ -82,11 +97,11 @@ def _yaw_frame(direction: np.ndarray) -> np.ndarray:
     return np.column_stack([d, np.cross(z, d), z])
 
 
-def expert_masses(load_compensation: bool, n_envs: int,
+def expert_masses(compensation: str, n_envs: int,
                   object_mass_kg: np.ndarray | None) -> np.ndarray:
-    """Per-env object masses [kg] for an expert's reset (required with load compensation)."""
-    if load_compensation and object_mass_kg is None:
-        raise InvalidArgumentError("load_compensation needs object_mass_kg in reset()")
+    """Per-env object masses [kg] for an expert's reset (required by privileged compensation)."""
+    if compensation == "privileged" and object_mass_kg is None:
+        raise InvalidArgumentError("compensation='privileged' needs object_mass_kg in reset()")
     if object_mass_kg is None:
         return np.zeros(int(n_envs))
     return np.asarray(object_mass_kg, dtype=float).reshape(int(n_envs))
@@ -95,15 +110,16 @@ def expert_masses(load_compensation: bool, n_envs: int,
 class PickPlaceExpert:
     """Batched closed-loop pick-and-place expert implementing the Policy protocol."""
 
-    def __init__(self, spec: PickPlaceSpec, load_compensation: bool = False) -> None:
+    def __init__(self, spec: PickPlaceSpec, compensation: str = "none") -> None:
+        check_choice("compensation", compensation, COMPENSATIONS)
         self.spec = spec
-        self.load_compensation = bool(load_compensation)
+        self.compensation = compensation
         self.reset(1, np.zeros(1))
 
     def reset(self, n_envs: int, object_mass_kg: np.ndarray | None = None) -> None:
-        """Start ``n_envs`` new episodes; masses are needed only with load compensation."""
+        """Start ``n_envs`` new episodes; masses are needed only by privileged compensation."""
         self.n = int(n_envs)
-        self.mass = expert_masses(self.load_compensation, self.n, object_mass_kg)
+        self.mass = expert_masses(self.compensation, self.n, object_mass_kg)
         self.phase = np.zeros(self.n, dtype=int)
         self.phase_steps = np.zeros(self.n, dtype=int)
         self.target = [None] * self.n
@@ -111,6 +127,7 @@ class PickPlaceExpert:
         self.grip = np.full(self.n, OPEN)
         self.obj_z0 = np.zeros(self.n)
         self.dwell = np.zeros(self.n, dtype=int)
+        self.offset_z = np.zeros(self.n)
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Actions (B, 10): TCP target position, rot6d, gripper."""
@@ -168,13 +185,29 @@ class PickPlaceExpert:
         step = s.speed_m_s / 30.0
         delta = waypoint - self.target[i]
         dist = np.linalg.norm(delta)
+        z_before = self.target[i][2]
         self.target[i] = waypoint.copy() if dist <= step else self.target[i] + delta * step / dist
         self.rot[i] = rot
+        if self.compensation == "closed_loop":
+            self._integrate_offset(i, o, vertically_still=self.target[i][2] == z_before)
         self.phase_steps[i] += 1
         timeout = self.phase_steps[i] >= s.timeout_steps(self.phase[i])
         if self.phase[i] < RETREAT and (self._phase_done(i, o, waypoint) or timeout):
             self._advance(i, o)
         return self._emit(i)
+
+    def _integrate_offset(self, i: int, o: dict[str, np.ndarray], vertically_still: bool) -> None:
+        """Closed-loop compensation: integrate the TCP height error while holding the object
+        with a vertically still target (so a moving target's tracking lag does not wind it
+        up); the offset is kept through the lowering and dropped at release."""
+        s = self.spec
+        if not LIFT <= self.phase[i] <= LOWER:
+            self.offset_z[i] = 0.0
+            return
+        if vertically_still:
+            error = self.target[i][2] - float(o["ee_pos"][2])
+            self.offset_z[i] = float(np.clip(self.offset_z[i] + s.lift_gain_per_s * error / 30.0,
+                                             0.0, s.max_offset_m))
 
     def _advance(self, i: int, o: dict[str, np.ndarray]) -> None:
         self.phase[i] += 1
@@ -189,12 +222,14 @@ class PickPlaceExpert:
     def _emit(self, i: int) -> np.ndarray:
         target = self.target[i].copy()
         holding = LIFT <= self.phase[i] <= LOWER
-        if self.load_compensation and holding:
+        if self.compensation == "privileged" and holding:
             target[2] += self.mass[i] * GRAVITY / self.spec.stiffness_z_n_per_m
+        elif self.compensation == "closed_loop" and holding:
+            target[2] += self.offset_z[i]
         return np.concatenate([target, rot6d_from_matrix(self.rot[i]), [self.grip[i]]])
 
 
-def make_expert(env_id: str, load_compensation: bool = False) -> PickPlaceExpert:
+def make_expert(env_id: str, compensation: str = "none") -> PickPlaceExpert:
     """The scripted expert of a registered IMPACT env id."""
     import impact_envs  # noqa: F401  (registers the envs)
 
@@ -204,4 +239,4 @@ def make_expert(env_id: str, load_compensation: bool = False) -> PickPlaceExpert
         ids = sorted(k for k in gym.registry if k.startswith("IMPACT/"))
         raise InvalidArgumentError(f"unknown env {env_id!r}; valid: {', '.join(ids)}") from exc
     env_cls = gym.envs.registration.load_env_creator(spec.entry_point)
-    return env_cls.make_task().make_expert(load_compensation=load_compensation)
+    return env_cls.make_task().make_expert(compensation=compensation)

@@ -138,8 +138,9 @@ class Task(ABC):
         """Whether the task is accomplished in the current state."""
 
     @abstractmethod
-    def make_expert(self, load_compensation: bool = False) -> Policy:
-        """The scripted expert (acts on batched observations of this task)."""
+    def make_expert(self, compensation: str = "none") -> Policy:
+        """The scripted expert (acts on batched observations of this task); ``compensation``:
+        how it meets a load's sag (``policies.scripted.COMPENSATIONS``)."""
 
     def before_tick(self, sim: FrankaSim, time_s: float) -> None:  # noqa: B027
         """Hook run before every physics tick (e.g. external disturbances). Default: nothing."""

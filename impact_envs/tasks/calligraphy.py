@@ -215,18 +215,19 @@ class CalligraphyTask(Task):
             **summary,
         }
 
-    def make_expert(self, load_compensation: bool = False) -> Policy:
+    def make_expert(self, compensation: str = "none") -> Policy:
         """The pen-following expert (``policies/scripted_calligraphy.py``).
 
         Raises:
-            InvalidArgumentError: ``load_compensation``: raised targets would lift the commanded
-                tip off the paper, and the task presses only while it is on the paper.
+            InvalidArgumentError: ``compensation`` other than ``"none"``: raised targets
+                would lift the commanded tip off the paper, and the task presses only while it
+                is on the paper.
         """
         from impact_envs.policies.scripted_calligraphy import CalligraphyExpert
 
-        if load_compensation:
+        if compensation != "none":
             raise InvalidArgumentError(
                 "IMPACT/Calligraphy-v0 has no load-compensating expert (raised targets lift the "
                 "commanded pen tip off the paper, so the task would never press); valid: "
-                "load_compensation=False")
+                "compensation='none'")
         return CalligraphyExpert(PEN_TIP_OFFSET_M, PAPER_TOP_M)

@@ -210,19 +210,19 @@ class DisturbanceTask(Task):
             "hold_s": self.hold_s(t),
         }
 
-    def make_expert(self, load_compensation: bool = False) -> Policy:
+    def make_expert(self, compensation: str = "none") -> Policy:
         """Pick, carry to the goal and hold (``policies/scripted_disturbance.py``).
 
         Raises:
-            InvalidArgumentError: ``load_compensation``: the expert's compensation is m g / K
-                for an object mass, but this env's swept parameter is a disturbance force with
-                a random direction and time profile.
+            InvalidArgumentError: ``compensation`` other than ``"none"``: the pick-and-place
+                experts compensate an object's weight, but this env's swept parameter is a
+                disturbance force with a random direction and time profile.
         """
         from impact_envs.policies.scripted_disturbance import make_carry_hold_expert
 
-        if load_compensation:
+        if compensation != "none":
             raise InvalidArgumentError(
                 "IMPACT/Disturbance-v0 has no load-compensating expert (its parameter is a "
                 "random, time-varying disturbance force, not a mass); valid: "
-                "load_compensation=False")
+                "compensation='none'")
         return make_carry_hold_expert(REST_Z_M)

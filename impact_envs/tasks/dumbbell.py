@@ -81,7 +81,7 @@ class DumbbellTask(Task):
         return {"is_grasped": sim.object_finger_contacts("dumbbell") >= 2,
                 "on_pad": footprint and height}
 
-    def make_expert(self, load_compensation: bool = False) -> PickPlaceExpert:
+    def make_expert(self, compensation: str = "none") -> PickPlaceExpert:
         spec = PickPlaceSpec(
             grasp_offset_obj=(0.0, 0.0, 0.0),
             grasp_z=PLATE_APOTHEM_M,
@@ -91,4 +91,4 @@ class DumbbellTask(Task):
             place_offset_goal=0.0,
             lift_margin_m=0.07,
         )
-        return PickPlaceExpert(spec, load_compensation=load_compensation)
+        return PickPlaceExpert(spec, compensation=compensation)

@@ -70,7 +70,7 @@ class HammerTask(Task):
     def info(self, sim: FrankaSim) -> dict[str, float | bool]:
         return {"is_grasped": sim.object_finger_contacts("hammer") >= 2}
 
-    def make_expert(self, load_compensation: bool = False) -> PickPlaceExpert:
+    def make_expert(self, compensation: str = "none") -> PickPlaceExpert:
         spec = PickPlaceSpec(
             grasp_offset_obj=(0.0, 0.0, 0.0),
             grasp_z=HANDLE_HALF_HEIGHT_M + PAD_CLEARANCE_M,
@@ -79,4 +79,4 @@ class HammerTask(Task):
             place_z=0.045,
             place_offset_goal=0.07,
         )
-        return PickPlaceExpert(spec, load_compensation=load_compensation)
+        return PickPlaceExpert(spec, compensation=compensation)

@@ -73,7 +73,7 @@ def default_expert_factory(cfg: CollectConfig) -> Callable[[], Expert]:
     def make() -> Expert:
         from impact_envs.policies.scripted import make_expert
 
-        return make_expert(cfg.env_id, load_compensation=cfg.load_compensation)
+        return make_expert(cfg.env_id, compensation=cfg.compensation)
 
     return make
 
@@ -86,7 +86,7 @@ def store_attrs(cfg: CollectConfig, param_name: str) -> dict:
         "param_spec": cfg.param_spec(),
         "controller": cfg.controller,
         "controller_preset": "default",  # gym.make's default; the demos' IMPACT settings
-        "expert": {"name": "scripted", "load_compensation": cfg.load_compensation},
+        "expert": {"name": "scripted", "compensation": cfg.compensation},
         "seed": cfg.seed,
         "post_success_steps": cfg.post_success_steps,
         "package_version": impact_envs.__version__,
@@ -148,8 +148,8 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("--mass-range", help="uniform range LO:HI")
     group.add_argument("--mass-list", help="comma-separated values, cycled over attempts")
     parser.add_argument(
-        "--load-compensation", action="store_true", help="expert uses privileged load compensation"
-    )
+        "--compensation", default="none",
+        help="how the expert meets a load's sag: none | closed_loop | privileged (ablation)")
     parser.add_argument("--controller", default="impedance", help="impedance | impact")
     parser.add_argument("--seed", type=int, default=0, help="base seed")
     parser.add_argument(
@@ -194,7 +194,7 @@ def config_from_args(args: argparse.Namespace) -> CollectConfig:
         param=param,
         param_range=param_range,
         param_list=param_list,
-        load_compensation=args.load_compensation,
+        compensation=args.compensation,
         controller=args.controller,
         seed=args.seed,
         post_success_steps=args.post_success_steps,

@@ -8,6 +8,8 @@ from typing import Any
 from impact_envs.errors import InvalidArgumentError, check_choice
 
 CONTROLLERS = ("impedance", "impact")
+COMPENSATIONS = ("none", "closed_loop", "privileged")
+"""Expert compensation modes (``impact_envs.policies.scripted.COMPENSATIONS``)."""
 
 
 @dataclass(frozen=True)
@@ -24,7 +26,9 @@ class CollectConfig:
         param: Fixed value of the env's randomized parameter (object mass [kg]).
         param_range: ``(low, high)`` of a uniform draw per attempt.
         param_list: Values cycled over attempts (``values[attempt % len]``).
-        load_compensation: The expert uses privileged load compensation.
+        compensation: How the expert meets a load's sag: ``none``, ``closed_loop`` (a
+            teleoperator's integral on the observed height error) or ``privileged`` (m g / K
+            from the mass; an ablation). ``policies/scripted.py``.
         controller: Low-level controller of the env: ``impedance`` or ``impact``.
         seed: Base seed; attempt k is seeded by ``(seed, k)``.
         post_success_steps: Steps recorded after the first step with ``info["is_success"]``
@@ -41,7 +45,7 @@ class CollectConfig:
     param: float | None = None
     param_range: tuple[float, float] | None = None
     param_list: tuple[float, ...] | None = None
-    load_compensation: bool = False
+    compensation: str = "none"
     controller: str = "impedance"
     seed: int = 0
     post_success_steps: int = 15
@@ -52,6 +56,7 @@ class CollectConfig:
 
     def __post_init__(self) -> None:
         check_choice("controller", self.controller, CONTROLLERS)
+        check_choice("compensation", self.compensation, COMPENSATIONS)
         given = [x is not None for x in (self.param, self.param_range, self.param_list)]
         if sum(given) > 1:
             raise InvalidArgumentError("give at most one of --mass, --mass-range, --mass-list")
