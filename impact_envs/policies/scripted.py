@@ -9,11 +9,12 @@ object that sags simply runs into the timeout — exactly what a fixed demonstra
 ``compensation`` chooses how the expert meets a load's sag under plain impedance:
 
 - ``"none"``: it commands the nominal waypoints (the sag is the controller's business).
-- ``"closed_loop"``: as a teleoperator does, with no knowledge of the mass. While it holds
-  the object and its nominal target is vertically still, it integrates the observed TCP height
-  error into a height offset added to its commands (``lift_gain_per_s``), so it raises its
-  command as far as the sag it sees; the offset is dropped at release. Used for the
-  Augmented-DP demonstrations (docs/diffusion_policy.md).
+- ``"closed_loop"``: as a teleoperator does, with no knowledge of the mass: while it holds
+  the object and its nominal target is vertically still, it raises its command above the
+  nominal waypoint in proportion to the TCP height error it observes (``lift_gain``) plus the
+  integral of that error (``lift_gain_per_s``), moving the offset no faster than its own
+  target speed; the offset is dropped at release.
+  Used for the Augmented-DP demonstrations (docs/diffusion_policy.md).
 - ``"privileged"``: an ablation only. It knows the mass and adds ``m g / K_z`` from the start
   of the lift, so in its demos every mass moves alike and the state does not tell how far to
   overshoot (the former Augmented demonstrator, docs/results.md §1).
@@ -55,7 +56,9 @@ class PickPlaceSpec:
         lift_margin_m: the object counts as lifted when its height rose by ``carry_z -
             grasp_z - lift_margin_m``.
         stiffness_z_n_per_m: impedance stiffness used for the privileged load compensation.
-        lift_gain_per_s: integral gain of the closed-loop compensation: the height offset grows
+        lift_gain: proportional gain of the closed-loop compensation: height offset per metre
+            of observed TCP height error [-].
+        lift_gain_per_s: integral gain of the closed-loop compensation: the integral part grows
             by this times the TCP height error per second [1/s].
         max_offset_m: bound of the closed-loop height offset, ``[0, max_offset_m]`` [m].
         timeouts_steps: per-phase timeouts at 30 Hz.
@@ -75,7 +78,8 @@ class PickPlaceSpec:
     reach_tol_m: float = 0.015
     lift_margin_m: float = 0.04
     stiffness_z_n_per_m: float = 400.0
-    lift_gain_per_s: float = 3.0
+    lift_gain: float = 1.0
+    lift_gain_per_s: float = 2.0
     max_offset_m: float = 0.3
     timeouts_steps: tuple[int, ...] = (90, 60, 18, 450, 150, 120, 15, 10_000)
     carry_dwell_steps: int = 0
@@ -128,6 +132,7 @@ class PickPlaceExpert:
         self.obj_z0 = np.zeros(self.n)
         self.dwell = np.zeros(self.n, dtype=int)
         self.offset_z = np.zeros(self.n)
+        self.integral_z = np.zeros(self.n)
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Actions (B, 10): TCP target position, rot6d, gripper."""
@@ -202,12 +207,16 @@ class PickPlaceExpert:
         up); the offset is kept through the lowering and dropped at release."""
         s = self.spec
         if not LIFT <= self.phase[i] <= LOWER:
-            self.offset_z[i] = 0.0
+            self.offset_z[i] = self.integral_z[i] = 0.0
             return
-        if vertically_still:
-            error = self.target[i][2] - float(o["ee_pos"][2])
-            self.offset_z[i] = float(np.clip(self.offset_z[i] + s.lift_gain_per_s * error / 30.0,
-                                             0.0, s.max_offset_m))
+        if not vertically_still:
+            return
+        error = self.target[i][2] - float(o["ee_pos"][2])
+        self.integral_z[i] = float(np.clip(
+            self.integral_z[i] + s.lift_gain_per_s * error / 30.0, 0.0, s.max_offset_m))
+        wanted = float(np.clip(s.lift_gain * error + self.integral_z[i], 0.0, s.max_offset_m))
+        step = s.speed_m_s / 30.0
+        self.offset_z[i] += float(np.clip(wanted - self.offset_z[i], -step, step))
 
     def _advance(self, i: int, o: dict[str, np.ndarray]) -> None:
         self.phase[i] += 1
