@@ -1,0 +1,13 @@
+"""The demonstrator-gain experiment runs real episodes and reports what happened."""
+
+from __future__ import annotations
+
+from impact_eval.demonstrator_gains import main
+
+
+def test_shipped_gains_carry_a_2kg_hammer_near_the_nominal_height(capsys):
+    main(["--kp", "1", "--ki", "2", "--masses", "2", "--episodes", "1", "--seed", "123"])
+    line = capsys.readouterr().out.strip()
+    assert "m=2 kg: 1/1" in line
+    low, high = (float(x) for x in line.split("carrying ")[1].removesuffix(" m").split("-"))
+    assert 0.12 < low < 0.18 < high < 0.25  # nominal carry height 0.18 m, no limit cycle
