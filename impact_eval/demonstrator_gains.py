@@ -2,7 +2,8 @@
 
 Runs the pick-and-place expert with ``compensation="closed_loop"`` and the given proportional
 and integral gains under plain impedance, one env at a time, and prints per mass the successes
-and the TCP height range while carrying (a limit cycle shows as a wide range). This is how the
+and the range of the TCP height minus the episode's nominal carry height while carrying (a
+limit cycle shows as a wide range). This is how the
 shipped gains were chosen (docs/diffusion_policy.md, "The closed-loop demonstrator"); episode
 seeds are ``seed + 1000 k + round(10 m)``, so use seeds you do not report.
 """
@@ -20,14 +21,15 @@ from impact_envs.policies.scripted import CARRY, RETREAT, PickPlaceExpert, make_
 
 
 def run_episode(env: gym.Env, expert: PickPlaceExpert, seed: int) -> tuple[bool, np.ndarray]:
-    """Success of one episode and the TCP heights [m] of its carry phase."""
+    """Success of one episode and the TCP height above the episode's nominal carry height [m]
+at each step of its carry phase."""
     obs, _ = env.reset(seed=seed)
     expert.reset(1)
     carry_z, success = [], False
     for _ in range(env.unwrapped.task.max_episode_steps):
         obs, _, terminated, truncated, info = env.step(expert.act(stack_obs([obs]))[0])
         if expert.phase[0] == CARRY:
-            carry_z.append(float(obs["ee_pos"][2]))
+            carry_z.append(float(obs["ee_pos"][2] - expert.carry_z[0]))
         success = bool(info.get("is_success", False))
         if (success and expert.phase[0] == RETREAT) or terminated or truncated:
             break
@@ -35,7 +37,7 @@ def run_episode(env: gym.Env, expert: PickPlaceExpert, seed: int) -> tuple[bool,
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Print successes and carry-height range per mass."""
+    """Print successes and the carry-height error range per mass."""
     parser = argparse.ArgumentParser(prog="python -m impact_eval.demonstrator_gains")
     parser.add_argument("--env", default="IMPACT/Hammer-v0", help="a pick-and-place env id")
     parser.add_argument("--kp", type=float, required=True, help="lift_gain [-]")
@@ -57,7 +59,8 @@ def main(argv: list[str] | None = None) -> None:
         env.close()
         z = np.asarray(heights) if heights else np.full(1, np.nan)
         print(f"{args.env} k_p={args.kp:g} k_i={args.ki:g}/s m={mass:g} kg: {wins}/{args.episodes}"
-              f"; TCP while carrying {z.min():.3f}-{z.max():.3f} m", flush=True)
+              f"; TCP minus nominal carry height {100 * z.min():+.1f} to {100 * z.max():+.1f} cm",
+              flush=True)
 
 
 if __name__ == "__main__":

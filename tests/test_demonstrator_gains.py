@@ -9,5 +9,5 @@ def test_shipped_gains_carry_a_2kg_hammer_near_the_nominal_height(capsys):
     main(["--kp", "1", "--ki", "2", "--masses", "2", "--episodes", "1", "--seed", "123"])
     line = capsys.readouterr().out.strip()
     assert "m=2 kg: 1/1" in line
-    low, high = (float(x) for x in line.split("carrying ")[1].removesuffix(" m").split("-"))
-    assert 0.12 < low < 0.18 < high < 0.25  # nominal carry height 0.18 m, no limit cycle
+    low, high = (float(x) for x in line.split("height ")[1].removesuffix(" cm").split(" to "))
+    assert -4.0 < low < 0.0 < high < 4.0  # sag removed, no limit cycle (k_p = 4 at 8 kg: 16 cm)

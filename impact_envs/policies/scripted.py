@@ -13,7 +13,8 @@ object that sags simply runs into the timeout — exactly what a fixed demonstra
   the object and its nominal target is vertically still, it raises its command above the
   nominal waypoint in proportion to the TCP height error it observes (``lift_gain``) plus the
   integral of that error (``lift_gain_per_s``), moving the offset no faster than its own
-  target speed; the offset is dropped at release.
+  target speed; the offset is dropped at release. Like a teleoperator it also varies its carry
+  height from episode to episode (``carry_jitter_m``).
   Used for the Augmented-DP demonstrations (docs/diffusion_policy.md).
 - ``"privileged"``: an ablation only. It knows the mass and adds ``m g / K_z`` from the start
   of the lift, so in its demos every mass moves alike and the state does not tell how far to
@@ -61,6 +62,10 @@ class PickPlaceSpec:
         lift_gain_per_s: integral gain of the closed-loop compensation: the integral part grows
             by this times the TCP height error per second [1/s].
         max_offset_m: bound of the closed-loop height offset, ``[0, max_offset_m]`` [m].
+        carry_jitter_m: with closed-loop compensation, each episode carries at ``carry_z + u *
+            carry_jitter_m``, u in [0, 1) a fixed function of the episode's first observation
+            (so of the env seed): a teleoperator does not lift to the same height every time,
+            and the demos then show carries from a range of heights [m].
         timeouts_steps: per-phase timeouts at 30 Hz.
         carry_dwell_steps: with > 0, the carry ends only after the target has rested this many
             steps at the carry waypoint above the goal (the carry timeout grows by as much):
@@ -81,12 +86,20 @@ class PickPlaceSpec:
     lift_gain: float = 1.0
     lift_gain_per_s: float = 2.0
     max_offset_m: float = 0.3
+    carry_jitter_m: float = 0.15
     timeouts_steps: tuple[int, ...] = (90, 60, 18, 450, 150, 120, 15, 10_000)
     carry_dwell_steps: int = 0
 
     def timeout_steps(self, phase: int) -> int:
         """Timeout of ``phase`` [policy steps] (the carry's includes the dwell)."""
         return self.timeouts_steps[phase] + (self.carry_dwell_steps if phase == CARRY else 0)
+
+
+def _unit_from_obs(o: dict[str, np.ndarray]) -> float:
+    """A number in [0, 1) that is a fixed function of the object's and goal's first positions
+    (randomized by the env seed), spread evenly over [0, 1) across episodes."""
+    x = 1e4 * (o["object_pos"][0] + 2.0 * o["object_pos"][1] + 3.0 * o["goal_pos"][1])
+    return float(x - np.floor(x))
 
 
 def _yaw_frame(direction: np.ndarray) -> np.ndarray:
@@ -133,6 +146,7 @@ class PickPlaceExpert:
         self.dwell = np.zeros(self.n, dtype=int)
         self.offset_z = np.zeros(self.n)
         self.integral_z = np.zeros(self.n)
+        self.carry_z = np.full(self.n, self.spec.carry_z)
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Actions (B, 10): TCP target position, rot6d, gripper."""
@@ -158,9 +172,9 @@ class PickPlaceExpert:
         sign = 1.0 if obj_rot[0, 0] >= 0.0 else -1.0
         goal_xy = o["goal_pos"][:2] + np.array([sign * s.place_offset_goal, 0.0])
         if phase == LIFT:
-            return np.array([self.target[i][0], self.target[i][1], s.carry_z]), self.rot[i]
+            return np.array([self.target[i][0], self.target[i][1], self.carry_z[i]]), self.rot[i]
         if phase == CARRY:
-            return np.array([goal_xy[0], goal_xy[1], s.carry_z]), goal_rot
+            return np.array([goal_xy[0], goal_xy[1], self.carry_z[i]]), goal_rot
         if phase in (LOWER, RELEASE):
             return np.array([goal_xy[0], goal_xy[1], s.place_z]), goal_rot
         return np.array([self.target[i][0], self.target[i][1], s.carry_z]), goal_rot
@@ -172,7 +186,8 @@ class PickPlaceExpert:
         if phase == GRASP:
             return self.phase_steps[i] >= 12 and float(o["gripper_width"][0]) < 0.07
         if phase == LIFT:
-            return o["object_pos"][2] - self.obj_z0[i] > s.carry_z - s.grasp_z - s.lift_margin_m
+            risen = o["object_pos"][2] - self.obj_z0[i]
+            return risen > self.carry_z[i] - s.grasp_z - s.lift_margin_m
         if phase == RELEASE:
             return self.phase_steps[i] >= s.timeouts_steps[RELEASE]
         if phase == CARRY and s.carry_dwell_steps > 0:
@@ -186,6 +201,8 @@ class PickPlaceExpert:
         if self.target[i] is None:
             self.target[i] = o["ee_pos"].copy()
             self.rot[i] = matrix_from_rot6d(o["ee_rot6d"])
+            if self.compensation == "closed_loop":
+                self.carry_z[i] = s.carry_z + s.carry_jitter_m * _unit_from_obs(o)
         waypoint, rot = self._waypoint(i, o)
         step = s.speed_m_s / 30.0
         delta = waypoint - self.target[i]
