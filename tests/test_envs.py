@@ -129,6 +129,26 @@ def test_bad_reset_option():
         env.reset(seed=0, options={"friction": 1.0})
 
 
+@pytest.mark.parametrize("value", [True, np.bool_(False), "3", None, [2.0], np.array([2.0])])
+def test_reset_option_must_be_a_real_number(value):
+    env = gym.make("IMPACT/Hammer-v0")
+    with pytest.raises(InvalidArgumentError, match="object_mass must be a real number") as err:
+        env.reset(seed=0, options={"object_mass": value})
+    assert "\n" not in str(err.value)
+    _, info = env.reset(seed=0, options={"object_mass": np.float32(2.0)})  # numpy scalars count
+    assert info["object_mass"] == 2.0
+
+
+@pytest.mark.parametrize("shape", [(10, 1), (1, 10), (2, 5), (11,), (9,), ()])
+def test_action_of_wrong_shape_is_refused_not_reshaped(shape):
+    env = gym.make("IMPACT/Hammer-v0")
+    env.reset(seed=0)
+    with pytest.raises(InvalidArgumentError, match=r"\(10,\) array"):
+        env.step(np.zeros(shape, dtype=np.float32))
+    with pytest.raises(InvalidArgumentError, match=r"\(10,\) array of numbers"):
+        env.step(["a"] * 10)
+
+
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_registered_episode_length_matches_task(env_id):
     env = gym.make(env_id)

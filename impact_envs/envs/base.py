@@ -189,9 +189,13 @@ class ImpactEnv(gym.Env):
 
     # -------------------------------------------------------------------- step
     def _decode_action(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-        a = np.asarray(action, dtype=np.float64).reshape(-1)
+        try:
+            a = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise InvalidArgumentError(f"action must be a (10,) array of numbers: {exc}") from None
         if a.shape != (10,) or not np.isfinite(a).all():
-            raise InvalidArgumentError(f"action must be 10 finite numbers, got shape {a.shape}")
+            raise InvalidArgumentError(
+                f"action must be a (10,) array of finite numbers, got shape {a.shape}")
         pos = np.clip(a[:3], self.task.workspace_low, self.task.workspace_high)
         quat = matrix_to_quat(matrix_from_rot6d(a[3:9]))
         if np.dot(quat, self._target_quat) < 0.0:

@@ -71,7 +71,9 @@ class CalligraphyEnv(ImpactEnv):
       pressing engages with the commanded tip within 5 mm of the paper and releases above
       10 mm (was: on exactly while within 2 mm). 2026-11-24: while pressing, the learning
       mask freezes all three force axes (was: z only), and the ``default`` controller preset
-      replaces the paper-literal one (``controller_preset="paper"``).
+      replaces the paper-literal one (``controller_preset="paper"``). 2026-11-25: bad input
+      only: an action must have shape ``(10,)`` (others were flattened) and a parameter
+      value must be a real number (bools and strings were coerced).
     """
 
     @classmethod

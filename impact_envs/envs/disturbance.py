@@ -66,6 +66,8 @@ class DisturbanceEnv(ImpactEnv):
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
       the disturbance acts only while the trough is held. 2026-11-24: the ``default``
       controller preset replaces the paper-literal one (``controller_preset="paper"``).
+      2026-11-25: bad input only: an action must have shape ``(10,)`` (others were
+      flattened) and a parameter value must be a real number (bools and strings were coerced).
     """
 
     @classmethod

@@ -61,7 +61,9 @@ class DumbbellEnv(ImpactEnv):
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
       configuration changed from the paper-literal table (now ``controller_preset="paper"``,
-      equal to the earlier defaults field for field) to the ``default`` preset.
+      equal to the earlier defaults field for field) to the ``default`` preset. 2026-11-25:
+      bad input only: an action must have shape ``(10,)`` (others were flattened) and a
+      parameter value must be a real number (bools and strings were coerced).
     """
 
     @classmethod

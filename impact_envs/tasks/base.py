@@ -6,6 +6,7 @@ A task knows its scene file, its objects and its varying physical parameters; th
 
 from __future__ import annotations
 
+import numbers
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
@@ -36,11 +37,14 @@ class TaskParam:
     unit: str
 
     def validate(self, value: float) -> float:
-        """Return ``value`` as float, or raise a one-line error naming the valid range."""
-        try:
-            v = float(value)
-        except (TypeError, ValueError) as exc:
-            raise InvalidArgumentError(f"{self.name} must be a number, got {value!r}") from exc
+        """Return ``value`` as float, or raise a one-line error naming the valid range.
+
+        Only real numbers count: a bool, a string or an array is refused (``True`` is not 1 kg).
+        """
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.number)):
+            raise InvalidArgumentError(
+                f"{self.name} must be a real number, got {type(value).__name__} {value!r}")
+        v = float(value)
         if not (np.isfinite(v) and self.low <= v <= self.high):
             raise InvalidArgumentError(
                 f"{self.name}={value!r} out of range; valid: {self.low} to {self.high} {self.unit}"
