@@ -116,6 +116,13 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="continue OUT: skip (method, value, episode) rows already written",
     )
+    p.add_argument(
+        "--trust-sb3",
+        action="store_true",
+        help="allow sb3:<zip> methods: SB3 zips are loaded with cloudpickle and CAN EXECUTE "
+        "ARBITRARY CODE from the file; pass only for files you trust (same as "
+        "IMPACT_TRUST_SB3=1)",
+    )
 
 
 def report_parser() -> argparse.ArgumentParser:
@@ -169,10 +176,27 @@ def _with_defaults(a: argparse.Namespace) -> argparse.Namespace:
 
 def run_sweep_command(argv: Sequence[str]) -> int:
     """The sweep: validate, then run, then write the summary and plots."""
+    a = _with_defaults(sweep_parser().parse_args(argv))
+    if not a.trust_sb3:
+        return _run_sweep(a, argv)
+    from impact_eval.methods import TRUST_SB3_ENV_VAR
+
+    before = os.environ.get(TRUST_SB3_ENV_VAR)
+    os.environ[TRUST_SB3_ENV_VAR] = "1"  # the workers inherit it
+    try:
+        return _run_sweep(a, argv)
+    finally:
+        if before is None:
+            del os.environ[TRUST_SB3_ENV_VAR]
+        else:
+            os.environ[TRUST_SB3_ENV_VAR] = before
+
+
+def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
+    """Run a parsed sweep command."""
     from impact_eval.execute import execute
     from impact_eval.prepare import SweepRequest, prepare
 
-    a = _with_defaults(sweep_parser().parse_args(argv))
     request = SweepRequest(
         env_id=a.env,
         methods=a.method,

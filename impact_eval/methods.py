@@ -41,6 +41,10 @@ CHECKPOINTS_ENV_VAR = "IMPACT_CHECKPOINTS"
 
 SB3_PREFIX = "sb3:"
 
+TRUST_SB3_ENV_VAR = "IMPACT_TRUST_SB3"
+"""Set to ``1`` (or pass ``impact-eval --trust-sb3``) to allow loading ``sb3:<zip>``: SB3's zip
+format unpickles Python objects, so a crafted file executes code when loaded."""
+
 PolicyFactory = Callable[[str, gym.Env], Policy]
 """``factory(env_id, env) -> Policy``; ``env`` is a built env of this method's controller."""
 
@@ -184,9 +188,18 @@ class SB3Policy:
 
 
 def load_sb3(path: str, env: gym.Env) -> SB3Policy:
-    """Load an SB3 zip with ``PPO.load``, ``SAC.load``, ``TD3.load`` in turn (CPU)."""
+    """Load an SB3 zip with ``PPO.load``, ``SAC.load``, ``TD3.load`` in turn (CPU).
+
+    Raises:
+        CheckpointError: missing file, unloadable file, or loading not allowed: SB3 zips are
+            unpickled and can run code, so they load only with ``$IMPACT_TRUST_SB3=1``.
+    """
     if not (Path(path).is_file() or Path(path + ".zip").is_file()):
         raise CheckpointError(f"SB3 checkpoint {path} does not exist")
+    if os.environ.get(TRUST_SB3_ENV_VAR) != "1":
+        raise CheckpointError(
+            f"refusing to load SB3 checkpoint {path}: SB3 zips are unpickled and can execute "
+            f"code; pass --trust-sb3 (or set {TRUST_SB3_ENV_VAR}=1) only for files you trust")
     import stable_baselines3 as sb3
 
     errors = []

@@ -126,6 +126,7 @@ BAD_INPUTS = {
     "missing checkpoint": (["--method", "vanilla_dp"], "no vanilla checkpoint"),
     "corrupt checkpoint": (["--method", "impact"], "cannot load vanilla checkpoint"),
     "corrupt sb3 zip": (["--method", "sb3:{tmp}/ppo.zip"], "cannot load SB3 checkpoint"),
+    "sb3 zip without opt-in": (["--method", "sb3:{tmp}/ppo.zip"], "pass --trust-sb3"),
     "missing sb3 zip": (["--method", "sb3:{tmp}/nope.zip"], "does not exist"),
     "out under a file": (["--out", "{tmp}/afile/sub"], "not writable"),
     "out on /proc": (["--out", "/proc/impact-eval-test"], "not writable"),
@@ -149,6 +150,10 @@ def test_bad_input_exits_2_without_files(
     monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(_corrupt_checkpoint(root)))
     if case == "missing checkpoint":
         monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(tmp_path / "empty"))
+    if case == "corrupt sb3 zip":
+        monkeypatch.setenv("IMPACT_TRUST_SB3", "1")  # as --trust-sb3 does
+    else:
+        monkeypatch.delenv("IMPACT_TRUST_SB3", raising=False)
     extra, message = BAD_INPUTS[case]
     out = tmp_path / "out"
     args = sweep_args(out, "--workers", "1")

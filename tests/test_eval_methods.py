@@ -59,7 +59,14 @@ def sac_zip(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def test_sb3_policy_is_batched_and_deterministic(sac_zip: Path) -> None:
+def test_sb3_zip_is_not_loaded_without_opt_in(sac_zip: Path, monkeypatch) -> None:
+    monkeypatch.delenv("IMPACT_TRUST_SB3", raising=False)
+    with pytest.raises(CheckpointError, match="can execute code; pass --trust-sb3"):
+        load_sb3(str(sac_zip), gym.make(BARE_ID))
+
+
+def test_sb3_policy_is_batched_and_deterministic(sac_zip: Path, monkeypatch) -> None:
+    monkeypatch.setenv("IMPACT_TRUST_SB3", "1")
     env = gym.make(BARE_ID)
     policy = load_sb3(str(sac_zip), env)
     obs = {"progress": np.zeros((3, 1), np.float32), "noise": np.ones((3, 2), np.float32)}
@@ -69,7 +76,8 @@ def test_sb3_policy_is_batched_and_deterministic(sac_zip: Path) -> None:
     assert np.array_equal(actions, policy.act(obs))
 
 
-def test_sb3_method_sweeps(sac_zip: Path, tmp_path: Path) -> None:
+def test_sb3_method_sweeps(sac_zip: Path, tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.delenv("IMPACT_TRUST_SB3", raising=False)  # --trust-sb3 below sets it
     out = tmp_path / "out"
     args = [
         "--env",
@@ -84,6 +92,7 @@ def test_sb3_method_sweeps(sac_zip: Path, tmp_path: Path) -> None:
         "1",
         "--out",
         str(out),
+        "--trust-sb3",
     ]
     assert main(args) == 0
     episodes = pd.read_csv(out / "episodes.csv")
