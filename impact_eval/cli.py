@@ -117,6 +117,12 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         help="continue OUT: skip (method, value, episode) rows already written",
     )
     p.add_argument(
+        "--beyond-hardware-limits",
+        action="store_true",
+        help="allow --controller-set limits above the FR3's (87/12 Nm, 1000 Nm/s); recorded "
+        "in run.json",
+    )
+    p.add_argument(
         "--trust-sb3",
         action="store_true",
         help="allow sb3:<zip> methods: SB3 zips are loaded with cloudpickle and CAN EXECUTE "
@@ -209,6 +215,7 @@ def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
         seed=a.seed,
         resume=a.resume,
         controller_overrides=tuple(a.controller_set),
+        beyond_hardware_limits=a.beyond_hardware_limits,
     )
     plan = prepare(request)
     t0 = time.perf_counter()

@@ -11,7 +11,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from impact_envs.control.config import ControllerConfig
+from impact_envs.control.config import ControllerConfig, beyond_hardware_limits
 from impact_envs.control.overrides import apply_overrides
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_eval import csvio, runinfo
@@ -44,6 +44,8 @@ class SweepRequest:
     seed: int
     resume: bool
     controller_overrides: tuple[str, ...] = ()
+    beyond_hardware_limits: bool = False
+    """Allow ``--controller-set`` limits above the FR3's torque and torque-rate limits."""
 
 
 @dataclass(frozen=True)
@@ -162,7 +164,12 @@ def prepare(req: SweepRequest) -> Plan:
     """Validate a sweep request without creating any file."""
     check_numbers(req)
     if req.controller_overrides:  # bad overrides fail here, before any env is built
-        apply_overrides(ControllerConfig(), req.controller_overrides)
+        overridden = apply_overrides(ControllerConfig(), req.controller_overrides)
+        above = beyond_hardware_limits(overridden.limits)
+        if above and not req.beyond_hardware_limits:
+            raise InvalidArgumentError(
+                f"{'; '.join(above)}: above the FR3's hardware limits (87 Nm x4, 12 Nm x3, "
+                "1000 Nm/s); pass --beyond-hardware-limits to run it anyway (run.json records it)")
     values = parse_grid(req.grid)
     check_env_id(req.env_id)  # imports the env's module, which may register methods too
     specs = parse_methods(req.methods)

@@ -285,3 +285,17 @@ def test_fused_chain_kernel_equals_update_then_kernel() -> None:
         out = [c.compute(q, dq, tau, pos, quat, gripper_width_m=0.04) for c in ctrls]
         np.testing.assert_array_equal(out[0], out[1])
     np.testing.assert_array_equal(ctrls[0].dynamics.mass_matrix, ctrls[1].dynamics.mass_matrix)
+
+
+def test_beyond_hardware_limits_names_each_setting_above_the_fr3() -> None:
+    from impact_envs.control.config import LimitsConfig, beyond_hardware_limits
+
+    assert beyond_hardware_limits(LimitsConfig()) == []
+    lower = LimitsConfig(torque_max_nm=(50.0,) * 4 + (10.0,) * 3, torque_rate_max_nm_per_s=500.0)
+    assert beyond_hardware_limits(lower) == []
+    above = LimitsConfig(torque_max_nm=(87.0,) * 4 + (12.0, 13.0, 12.0),
+                         torque_rate_max_nm_per_s=1000.5)
+    assert beyond_hardware_limits(above) == [
+        "limits.torque_max_nm[5]=13 > 12 Nm",
+        "limits.torque_rate_max_nm_per_s=1000.5 > 1000 Nm/s",
+    ]

@@ -136,6 +136,14 @@ BAD_INPUTS = {
         "unknown field 'lr' of controller config section 'internal_model'; valid:",
     ),
     "no scripted expert": (["--method", "scripted"], "cannot build method 'scripted'"),
+    "torque above the FR3": (
+        ["--controller-set", "limits.torque_max_nm=1000,87,87,87,12,12,12"],
+        "limits.torque_max_nm[0]=1000 > 87 Nm: above the FR3's hardware limits",
+    ),
+    "torque rate above the FR3": (
+        ["--controller-set", "limits.torque_rate_max_nm_per_s=5000"],
+        "pass --beyond-hardware-limits",
+    ),
 }
 
 
@@ -241,3 +249,16 @@ def test_sweep_workers_are_single_threaded() -> None:
     assert torch_threads == 1
     assert env == ["1"] * len(THREAD_ENV)  # OpenMP, OpenBLAS, MKL: read when they load
     assert {k: os.environ.get(k) for k in THREAD_ENV} == before  # parent's env restored
+
+
+def test_beyond_hardware_limits_flag_allows_and_records_it(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    args = ["--env", "IMPACT/Hammer-v0", "--method", "scripted", "--masses", "0.2",
+            "--episodes", "1", "--workers", "1", "--out", str(out),
+            "--controller-set", "limits.torque_rate_max_nm_per_s=2000"]
+    assert main(args) == 2  # refused without the flag, nothing written
+    assert not out.exists()
+    assert main([*args, "--beyond-hardware-limits"]) == 0
+    run = json.loads((out / "run.json").read_text())
+    assert run["args"]["beyond_hardware_limits"] is True
+    assert run["args"]["controller_set"] == ["limits.torque_rate_max_nm_per_s=2000"]

@@ -231,6 +231,18 @@ class LimitsConfig:
         _check_positive("torque_rate_max_nm_per_s", self.torque_rate_max_nm_per_s)
 
 
+def beyond_hardware_limits(limits: LimitsConfig) -> list[str]:
+    """The settings of ``limits`` above the FR3's hardware limits (empty when within)."""
+    fr3 = LimitsConfig()
+    above = [f"limits.torque_max_nm[{i}]={v:g} > {hw:g} Nm"
+             for i, (v, hw) in enumerate(zip(limits.torque_max_nm, fr3.torque_max_nm,
+                                             strict=True)) if v > hw]
+    if limits.torque_rate_max_nm_per_s > fr3.torque_rate_max_nm_per_s:
+        above.append(f"limits.torque_rate_max_nm_per_s={limits.torque_rate_max_nm_per_s:g} > "
+                     f"{fr3.torque_rate_max_nm_per_s:g} Nm/s")
+    return above
+
+
 @dataclass(frozen=True)
 class ControllerConfig:
     """Top-level controller configuration.
