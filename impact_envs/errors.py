@@ -28,3 +28,7 @@ def check_choice(name: str, value: object, choices: list[str] | tuple[str, ...])
         raise InvalidArgumentError(
             f"invalid {name} {value!r}; valid choices: {', '.join(map(str, choices))}"
         )
+
+
+class TrainingError(ImpactError):
+    """Training cannot go on (e.g. a non-finite loss); nothing non-finite is written."""

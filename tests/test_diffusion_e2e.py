@@ -184,6 +184,44 @@ def test_collect_train_rollout(tmp_path):
     assert rollout(policy, FAKE_ID, n_envs=3, steps=12).shape == (3,)
 
 
+def test_train_refuses_a_store_holding_nan_before_writing_anything(tmp_path, capsys):
+    import zarr
+
+    from impact_envs.policies.diffusion import train as train_module
+
+    _collect(tmp_path / "d.zarr", param=0.2)
+    arr = zarr.open_group(str(tmp_path / "d.zarr"), mode="r+")["data/ee_pos"]
+    arr[3, 1] = np.nan
+    with pytest.raises(SystemExit) as exc:
+        train_module.main(["--data", str(tmp_path / "d.zarr"), "--out", str(tmp_path / "run"),
+                           "--steps", "5", "--no-progress"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "data/ee_pos holds 1 non-finite values" in err
+    assert "episodes [0]" in err
+    assert not (tmp_path / "run").exists()
+
+
+def test_non_finite_loss_stops_before_the_weights_change(tmp_path, monkeypatch):
+    from impact_envs.errors import TrainingError
+    from impact_envs.policies.diffusion import train as train_module
+
+    _collect(tmp_path / "d.zarr", param=0.2)
+    real_loss, calls = train_module.diffusion_loss, []
+
+    def loss_going_nan(*args):
+        calls.append(1)
+        loss = real_loss(*args)
+        return loss * float("nan") if len(calls) > 5 else loss
+
+    monkeypatch.setattr(train_module, "diffusion_loss", loss_going_nan)
+    opts = RunOptions(steps=10, checkpoint_every=5, val_every=5, val_fraction=0.2, progress=False)
+    with pytest.raises(TrainingError, match="non-finite loss at step 6"):
+        train(CFG, tmp_path / "d.zarr", tmp_path / "run", opts)
+    policy = DiffusionPolicy.load(tmp_path / "run" / "policy")  # the step-5 export
+    assert all(torch.isfinite(p).all() for p in policy.net.parameters())
+
+
 @pytest.mark.slow
 def test_policy_learns_fake_reach(tmp_path):
     """~1 min: 1000 steps at a raised learning rate cut the held-out action error and bring

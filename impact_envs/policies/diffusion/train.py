@@ -22,7 +22,7 @@ from pathlib import Path
 
 import torch
 
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_envs.errors import ImpactError, InvalidArgumentError, TrainingError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.ema import EMA
 from impact_envs.policies.diffusion.model import diffusion_loss, make_network
@@ -89,6 +89,10 @@ def train_step(state: TrainState, data: TrainData, cfg: DiffusionConfig, lr: flo
     """One AdamW step on a random batch; returns the batch loss."""
     obs, actions = data.train.sample(cfg.batch_size, state.generator)
     loss = diffusion_loss(state.net, data.scheduler, obs, actions, state.generator)
+    if not torch.isfinite(loss):
+        raise TrainingError(
+            f"non-finite loss at step {state.step + 1}; stopped before updating the weights "
+            "(the exports on disk are from earlier, finite steps)")
     for group in state.optimizer.param_groups:
         group["lr"] = lr
     state.optimizer.zero_grad(set_to_none=True)

@@ -14,6 +14,7 @@ from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.dataset import (
     ACTION_KEY,
+    ReplayData,
     WindowSampler,
     load_replay,
     window_indices,
@@ -67,9 +68,26 @@ def _check_gripper(cfg: DiffusionConfig, gripper: np.ndarray) -> None:
         )
 
 
+def _check_finite(replay: ReplayData, keys: tuple[str, ...], path: Path) -> None:
+    """Refuse a store whose training arrays hold NaN or inf (before anything is written)."""
+    for key in keys:
+        values = np.asarray(replay.data[key]) if key in replay.data else None
+        if values is None:
+            continue  # a missing key is reported by obs_matrix with the valid keys
+        bad = ~np.isfinite(values)
+        if bad.any():
+            rows = np.flatnonzero(bad.any(axis=1))
+            episodes = np.unique(np.searchsorted(replay.episode_ends, rows, side="right"))
+            raise InvalidArgumentError(
+                f"{path}: data/{key} holds {int(bad.sum())} non-finite values (NaN/inf) in "
+                f"episodes {episodes[:5].tolist()}{' ...' if len(episodes) > 5 else ''}; "
+                "refusing to train on them")
+
+
 def load_train_data(cfg: DiffusionConfig, path: Path, val_fraction: float) -> TrainData:
     """Load ``path``, split episodes, fit the normalizer on the training part."""
     replay = load_replay(path)
+    _check_finite(replay, (*cfg.obs_keys, ACTION_KEY), path)
     obs = replay.obs_matrix(cfg.obs_keys)
     actions = replay.data[ACTION_KEY]
     _check_gripper(cfg, np.asarray(actions[:, GRIPPER_DIM]))
