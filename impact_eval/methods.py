@@ -152,12 +152,16 @@ def _dp_factory(variant: str) -> PolicyFactory:
         try:
             from impact_envs.policies.diffusion.policy import DiffusionPolicy
 
-            return DiffusionPolicy.load(path)
+            policy = DiffusionPolicy.load(path)
         except Exception as exc:  # noqa: BLE001 - any load failure means a corrupt checkpoint
             msg = " ".join(str(exc).split())[:160]
             raise CheckpointError(
                 f"cannot load {variant} checkpoint {path}: {type(exc).__name__}: {msg}"
             ) from None
+        from impact_envs.policies.diffusion.compat import check_policy_env
+
+        check_policy_env(policy, env_id, env, str(path))
+        return policy
 
     return build
 

@@ -1,0 +1,54 @@
+"""Pre-flight check of a loaded diffusion-policy checkpoint against the env it will drive.
+
+``DiffusionPolicy.load`` checks that a checkpoint is internally consistent. This module checks
+that it fits an env: finite weights and normalizer, the task it was trained on (the demos'
+``env_id``), its observation keys and sizes, and its action size. Any mismatch is one
+``CheckpointError`` line, raised before an episode runs.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+from impact_envs.errors import CheckpointError
+from impact_envs.policies.diffusion.policy import DiffusionPolicy
+
+
+def _bare_id(env_id: str) -> str:
+    """``"mod:IMPACT/Hammer-v0"`` -> ``"IMPACT/Hammer-v0"``."""
+    return env_id.rsplit(":", 1)[-1]
+
+
+def trained_env_id(policy: DiffusionPolicy) -> str | None:
+    """The env id of the checkpoint's demonstrations (None where the metadata has none)."""
+    attrs = policy.meta.get("dataset", {}).get("attrs", {})
+    env_id = attrs.get("env_id") if isinstance(attrs, dict) else None
+    return str(env_id) if env_id else None
+
+
+def check_policy_env(policy: DiffusionPolicy, env_id: str, env: gym.Env, where: str) -> None:
+    """Raise ``CheckpointError`` unless ``policy`` (loaded from ``where``) fits ``env``."""
+    tensors = [*policy.net.state_dict().values(), *policy.normalizer.state_dict().values()]
+    if not all(torch.isfinite(t).all() for t in tensors if t.is_floating_point()):
+        raise CheckpointError(f"checkpoint {where} holds non-finite weights (NaN/inf)")
+    trained = trained_env_id(policy)
+    if trained is not None and _bare_id(trained) != _bare_id(env_id):
+        raise CheckpointError(
+            f"checkpoint {where} was trained on {trained}, not {_bare_id(env_id)}")
+    spaces = getattr(env.observation_space, "spaces", {})
+    for key, dim in policy.obs_dims.items():
+        if key not in spaces:
+            raise CheckpointError(
+                f"checkpoint {where} needs observation {key!r}; the env has {sorted(spaces)}")
+        size = int(np.prod(spaces[key].shape))
+        if size != dim:
+            raise CheckpointError(
+                f"checkpoint {where} expects {key!r} of size {dim}, the env gives {size}")
+    action_dim = int(np.prod(env.action_space.shape))
+    checkpoint_dim = int(policy.meta.get("action_dim", action_dim))
+    if checkpoint_dim != action_dim:
+        raise CheckpointError(
+            f"checkpoint {where} outputs {checkpoint_dim} action values, the env takes "
+            f"{action_dim}")

@@ -1,0 +1,55 @@
+"""Checkpoint pre-flight against the env: every shipped checkpoint fits its own env, and a
+checkpoint of another task, with NaN weights or other observation sizes is refused."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import gymnasium as gym
+import pytest
+from safetensors.torch import load_file, save_file
+
+import impact_envs
+from impact_envs.errors import CheckpointError
+from impact_envs.policies.diffusion.compat import check_policy_env
+from impact_envs.policies.diffusion.policy import DiffusionPolicy
+
+ROOT = Path(impact_envs.__file__).parent / "checkpoints"
+SHIPPED = sorted(p.parent for p in ROOT.glob("*/*/model.safetensors"))
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_shipped_checkpoints_fit_their_env(path: Path) -> None:
+    env_id = f"IMPACT/{path.parent.name.capitalize()}-v0"
+    check_policy_env(DiffusionPolicy.load(path), env_id, gym.make(env_id), str(path))
+
+
+def test_checkpoint_of_another_task_is_refused() -> None:
+    policy = DiffusionPolicy.load(ROOT / "calligraphy" / "vanilla")
+    with pytest.raises(CheckpointError, match="trained on IMPACT/Calligraphy-v0, not IMPACT/Ham"):
+        check_policy_env(policy, "IMPACT/Hammer-v0", gym.make("IMPACT/Hammer-v0"), "x")
+
+
+def test_nan_weights_are_refused(tmp_path: Path) -> None:
+    copy = tmp_path / "ckpt"
+    shutil.copytree(ROOT / "hammer" / "vanilla", copy)
+    tensors = load_file(str(copy / "model.safetensors"))
+    first = next(iter(tensors))
+    tensors[first] = tensors[first] * float("nan")
+    save_file(tensors, str(copy / "model.safetensors"))
+    with pytest.raises(CheckpointError, match="non-finite weights"):
+        check_policy_env(DiffusionPolicy.load(copy), "IMPACT/Hammer-v0",
+                         gym.make("IMPACT/Hammer-v0"), str(copy))
+
+
+def test_other_action_size_is_refused(tmp_path: Path) -> None:
+    copy = tmp_path / "ckpt"
+    shutil.copytree(ROOT / "hammer" / "vanilla", copy)
+    meta = json.loads((copy / "meta.json").read_text())
+    meta["action_dim"] = 7
+    (copy / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(CheckpointError, match="outputs 7 action values, the env takes 10"):
+        check_policy_env(DiffusionPolicy.load(copy), "IMPACT/Hammer-v0",
+                         gym.make("IMPACT/Hammer-v0"), str(copy))
