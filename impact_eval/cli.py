@@ -226,7 +226,27 @@ def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
         f"{result.rows} in total) in {wall:.1f} s wall"
     )
     _print_outputs(plan.out, result.summary, result.plots)
+    crashed = crashed_cells(plan.out)
+    if crashed:
+        print(f"{PROG}: error: every episode raised in {len(crashed)} cell(s): "
+              f"{'; '.join(crashed[:3])}{' ...' if len(crashed) > 3 else ''} "
+              "(failure_reason in episodes.csv, n_exception in summary.csv)", file=sys.stderr)
+        return 1
     return 0
+
+
+def crashed_cells(out: Path) -> list[str]:
+    """``"method @ value: reason"`` of each (method, value) cell of ``out/episodes.csv`` whose
+    every episode ended in an exception (a broken policy or env, not a hard task)."""
+    import pandas as pd
+
+    episodes = pd.read_csv(out / "episodes.csv", keep_default_na=False)
+    cells = []
+    for (method, value), group in episodes.groupby(["method", "param_value"], sort=True):
+        reasons = group["failure_reason"].astype(str)
+        if len(group) and reasons.str.startswith("exception").all():
+            cells.append(f"{method} @ {value:g}: {reasons.iloc[0]}")
+    return cells
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -43,9 +43,13 @@ def sweep_args(out: Path, *extra: str, masses: str = "0.5:4:1.5") -> list[str]:
     ]
 
 
-def test_sweep_writes_csvs_run_json_and_plots(tmp_path: Path) -> None:
+def test_sweep_writes_csvs_run_json_and_plots(tmp_path: Path, capsys) -> None:
     out = tmp_path / "run"
-    assert main(sweep_args(out, "--workers", "1", masses="0.5,2,66,77,88")) == 0
+    # mass 77: every episode raises; the sweep completes, writes everything and exits 1
+    assert main(sweep_args(out, "--workers", "1", masses="0.5,2,66,77,88")) == 1
+    err = capsys.readouterr().err.splitlines()[-1]  # after the progress bar
+    assert err.startswith("impact-eval: error: every episode raised in 3 cell(s)")
+    assert "fake_fast @ 77: exception: RuntimeError" in err
     episodes = pd.read_csv(out / "episodes.csv", keep_default_na=False)
     assert len(episodes) == 3 * 5 * 5
     assert set(episodes["env_id"]) == {"ImpactTest/Fake-v0"}
