@@ -282,3 +282,41 @@ def test_env_factory_sets_the_envs_own_parameter(tmp_path):
     _, _, _, _, info = env.step(env.action_space.sample())
     assert env.unwrapped.param_name == "tool_mass"
     assert info["tool_mass"] == 1.5
+
+
+TRAIN_BAD_INPUTS = {
+    "text file as data": (["--data", "{tmp}/t.txt"], "is not a readable demonstration store"),
+    "empty dir as data": (["--data", "{tmp}/empty"], "is not a readable demonstration store"),
+    "garbage config": (["--config", "{tmp}/g.json"], "cannot read config"),
+    "list config": (["--config", "{tmp}/l.json"], "must be a JSON object"),
+    "missing config": (["--config", "{tmp}/nope.json"], "cannot read config"),
+    "negative threads": (["--threads", "-1"], "--threads must be >= 1"),
+    "out is a file": (["--out", "{tmp}/t.txt"], "is a file; give a directory"),
+}
+
+
+@pytest.fixture(scope="module")
+def small_store(tmp_path_factory):
+    path = tmp_path_factory.mktemp("store") / "d.zarr"
+    _collect(path, param=0.2)
+    return path
+
+
+@pytest.mark.parametrize("case", list(TRAIN_BAD_INPUTS))
+def test_train_bad_input_is_one_line_and_writes_nothing(case, small_store, tmp_path, capsys):
+    from impact_envs.policies.diffusion import train as train_module
+
+    (tmp_path / "t.txt").write_text("hi")
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "g.json").write_text("{garbage")
+    (tmp_path / "l.json").write_text("[1, 2]")
+    before = sorted(p.name for p in tmp_path.iterdir())
+    args = {"--data": str(small_store), "--out": str(tmp_path / "run"), "--steps": "2"}
+    extra, message = TRAIN_BAD_INPUTS[case]
+    args[extra[0]] = extra[1].replace("{tmp}", str(tmp_path))
+    with pytest.raises(SystemExit) as exc:
+        train_module.main([*(x for kv in args.items() for x in kv), "--no-progress"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("impact-train: error:") and message in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before

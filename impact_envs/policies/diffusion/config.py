@@ -170,5 +170,14 @@ class DiffusionConfig:
 
     @classmethod
     def from_json(cls, path: str | Path) -> DiffusionConfig:
-        """Read a config written by ``to_json``."""
-        return cls.from_dict(json.loads(Path(path).read_text()))
+        """Read a config written by ``to_json`` (one-line ``InvalidArgumentError`` if the file is
+        missing, unreadable, not JSON or not a JSON object)."""
+        try:
+            data = json.loads(Path(path).read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise InvalidArgumentError(f"cannot read config {path}: {exc}") from None
+        if not isinstance(data, dict):
+            raise InvalidArgumentError(
+                f"config {path} must be a JSON object of DiffusionConfig fields, "
+                f"got {type(data).__name__}")
+        return cls.from_dict(data)

@@ -183,11 +183,22 @@ def load_replay(path: str | Path) -> ReplayData:
     """Load a store written by ``ReplayWriter`` (complete episodes only)."""
     if not Path(path).exists():
         raise InvalidArgumentError(f"dataset {path} does not exist")
-    root = zarr.open_group(str(path), mode="r")
-    ends = np.asarray(root["meta/episode_ends"][:], dtype=np.int64)
-    n_steps = int(ends[-1]) if len(ends) else 0
-    data = {k: np.asarray(a[:n_steps]) for k, a in root["data"].arrays()}
-    meta = {k: np.asarray(root[f"meta/{k}"][: len(ends)]) for k in META_DTYPES}
+    try:
+        root = zarr.open_group(str(path), mode="r")
+        ends = np.asarray(root["meta/episode_ends"][:], dtype=np.int64)
+        n_steps = int(ends[-1]) if len(ends) else 0
+        data = {k: np.asarray(a[:n_steps]) for k, a in root["data"].arrays()}
+        meta = {k: np.asarray(root[f"meta/{k}"][: len(ends)]) for k in META_DTYPES}
+    except Exception as exc:  # noqa: BLE001 - zarr raises many types for foreign/corrupt stores
+        msg = " ".join(str(exc).split())[:120]
+        raise InvalidArgumentError(
+            f"{path} is not a readable demonstration store (impact-collect's zarr layout): "
+            f"{type(exc).__name__}: {msg}") from None
+    if ACTION_KEY not in data or len(ends) == 0:
+        raise InvalidArgumentError(
+            f"{path} holds no episodes with actions (data/{ACTION_KEY}, meta/episode_ends)")
+    if any(len(a) < n_steps for a in data.values()):
+        raise InvalidArgumentError(f"{path} is truncated: arrays shorter than episode_ends says")
     return ReplayData(data, ends, meta, dict(root.attrs))
 
 

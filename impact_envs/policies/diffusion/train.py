@@ -198,6 +198,10 @@ def main(argv: list[str] | None = None) -> None:
 
 def run_from_args(args: argparse.Namespace) -> None:
     """Train as the parsed ``impact-train`` arguments say."""
+    if args.threads is not None and args.threads < 1:
+        raise InvalidArgumentError(f"--threads must be >= 1, got {args.threads}")
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise InvalidArgumentError(f"--out {args.out} is a file; give a directory")
     if args.threads:
         torch.set_num_threads(args.threads)
     base = DiffusionConfig.from_json(args.config) if args.config else DiffusionConfig()
