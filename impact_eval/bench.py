@@ -29,6 +29,7 @@ import mujoco
 import numpy as np
 
 import impact_envs
+from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.policies.protocol import stack_obs
 from impact_envs.policies.scripted import make_expert
 
@@ -161,6 +162,18 @@ def _print_table(args: argparse.Namespace, rtf: dict[str, Timing], n_ticks: int)
     )
 
 
+def _check_args(args: argparse.Namespace) -> None:
+    """One-line ``InvalidArgumentError`` for a step count, repeat count or mass out of range."""
+    if args.steps < 2 or args.repeat < 1:
+        raise InvalidArgumentError(
+            f"need --steps >= 2 and --repeat >= 1, got {args.steps} and {args.repeat}")
+    env = gym.make(args.env)
+    try:
+        env.unwrapped.task.param("object_mass").validate(args.mass)
+    finally:
+        env.close()
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="impact-bench", description=__doc__.splitlines()[0])
     parser.add_argument("--env", default="IMPACT/Hammer-v0", choices=impact_envs.ENV_IDS)
@@ -170,6 +183,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--repeat", type=int, default=3, help="runs of each kind; best kept")
     parser.add_argument("--stages", action="store_true", help="also print per-stage costs")
     args = parser.parse_args(argv)
+    try:
+        _check_args(args)
+    except ImpactError as exc:
+        parser.exit(2, f"impact-bench: error: {exc}\n")
     rtf = {k: Timing() for k in (*RUNS, "raw")}
     for _ in range(max(1, args.repeat)):
         replay = None

@@ -258,6 +258,16 @@ def plot(df: pd.DataFrame, path: Path) -> list[Path]:
     return paths
 
 
+def _check_masses(env_id: str, masses: tuple[float, ...]) -> None:
+    """One-line ``InvalidArgumentError`` for a mass outside the env's range (before any file)."""
+    env = gym.make(env_id)
+    try:
+        for mass in masses:
+            env.unwrapped.task.param("object_mass").validate(mass)
+    finally:
+        env.close()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="impact-protocol", description=__doc__.splitlines()[0])
     parser.add_argument("--env", default="IMPACT/Dumbbell-v0")
@@ -272,6 +282,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         check_choice("env", args.env, impact_envs.ENV_IDS)
         masses = tuple(float(m) for m in args.masses.split(","))
+        _check_masses(args.env, masses)
         if args.repeats < 1:
             raise ValueError(f"--repeats must be >= 1, got {args.repeats}")
         protocol_expert(args.env, args.hold_s)  # validates env and hold

@@ -60,6 +60,15 @@ def test_bad_repeats_is_a_one_line_error(tmp_path, capsys):
     assert err.count("\n") == 0 and "--repeats must be >= 1" in err
 
 
+@pytest.mark.parametrize("masses", ["-3", "nan", "2.5,abc", "2.5,99"])
+def test_bad_masses_are_one_line_and_write_nothing(tmp_path, capsys, masses):
+    out = tmp_path / "out"
+    assert main([f"--masses={masses}", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("impact-protocol: error:")
+    assert not out.exists()
+
+
 def test_adapt_time_ignores_lag_behind_a_descending_target():
     """A sag that decays below 1 cm adapts; the lag after the place descent does not undo it."""
     ep = _episode("impact", 1, 0.0)
