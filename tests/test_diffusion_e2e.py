@@ -144,6 +144,10 @@ def test_collect_cli(tmp_path, monkeypatch, capsys):
      "valid choices: none, closed_loop, privileged"),
     (["--env", "IMPACT/Calligraphy-v0", "--compensation", "closed_loop"], "compensation='none'"),
     (["--env", "IMPACT/Disturbance-v0", "--compensation", "closed_loop"], "compensation='none'"),
+    (["--env", "IMPACT/Hammer-v0", "--mass-list", "50,1"], "object_mass=50.0 out of range"),
+    (["--env", "IMPACT/Hammer-v0", "--mass-range", "1:100"], "object_mass=100.0 out of range"),
+    (["--env", "IMPACT/Hammer-v0", "--max-attempts", "0"], "--max-attempts must be >= 1"),
+    (["--env", "IMPACT/Hammer-v0", "--seed", "-1"], "--seed must be >= 0"),
 ])
 def test_collect_cli_bad_input_is_one_line(tmp_path, capsys, extra, needle):
     with pytest.raises(SystemExit) as exc:
@@ -152,6 +156,7 @@ def test_collect_cli_bad_input_is_one_line(tmp_path, capsys, extra, needle):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("impact-collect: error:") and err.count("\n") == 1 and needle in err
+    assert not (tmp_path / "x.zarr").exists()  # nothing left to block a retry
 
 
 def test_param_spec_parsing():

@@ -93,6 +93,17 @@ def store_attrs(cfg: CollectConfig, param_name: str) -> dict:
     }
 
 
+def _check_param_values(env: gym.Env, param_name: str, cfg: CollectConfig) -> None:
+    """Every value the run can draw must be in the env's range (checked before the store
+    exists, so a bad range leaves nothing behind). Envs without task parameters are skipped."""
+    task = getattr(env.unwrapped, "task", None)
+    if task is None or not hasattr(task, "param"):
+        return
+    spec = cfg.param_spec()
+    for value in spec.get("values", []):
+        task.param(param_name).validate(value)
+
+
 def collect(
     cfg: CollectConfig,
     *,
@@ -107,6 +118,7 @@ def collect(
     envs = [make_env() for _ in range(cfg.n_envs)]
     expert = (expert_factory or default_expert_factory(cfg))()
     param_name = getattr(envs[0].unwrapped, "param_name", "object_mass")
+    _check_param_values(envs[0], param_name, cfg)
     space = envs[0].observation_space
     obs_dims = {k: int(np.prod(s.shape)) for k, s in space.spaces.items()}
     writer = ReplayWriter(cfg.out, obs_dims, store_attrs(cfg, param_name), append=cfg.resume)

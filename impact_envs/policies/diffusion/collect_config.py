@@ -62,6 +62,10 @@ class CollectConfig:
             raise InvalidArgumentError("give at most one of --mass, --mass-range, --mass-list")
         if self.episodes < 1 or self.n_envs < 1 or self.post_success_steps < 0:
             raise InvalidArgumentError("need episodes >= 1, n_envs >= 1, post_success_steps >= 0")
+        if self.seed < 0:
+            raise InvalidArgumentError(f"--seed must be >= 0, got {self.seed}")
+        if self.max_attempts is not None and self.max_attempts < 1:
+            raise InvalidArgumentError(f"--max-attempts must be >= 1, got {self.max_attempts}")
         if self.param_range is not None and not self.param_range[0] <= self.param_range[1]:
             raise InvalidArgumentError(
                 f"mass range must be LO:HI with LO <= HI: {self.param_range}"
