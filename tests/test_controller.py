@@ -299,3 +299,23 @@ def test_beyond_hardware_limits_names_each_setting_above_the_fr3() -> None:
         "limits.torque_max_nm[5]=13 > 12 Nm",
         "limits.torque_rate_max_nm_per_s=1000.5 > 1000 Nm/s",
     ]
+
+
+@pytest.mark.parametrize("field, value", [
+    ("q", np.zeros(1)), ("dq", np.zeros(8)), ("tau_measured", np.zeros((7, 1))),
+    ("pos_target_world", np.zeros(2)), ("quat_target_world", np.array([1.0, 0.0, 0.0])),
+    ("wrench_cmd_world", np.zeros(3)),
+])
+def test_wrong_input_shapes_are_refused_before_the_kernel(field, value) -> None:
+    """The kernels index fixed sizes; a short array must not be read out of bounds, and a
+    refused tick leaves the controller as it was (the next valid tick equals a fresh one's)."""
+    dyn_a, ctrl, q0 = _make("impact")
+    dyn_b, fresh, _ = _make("impact")
+    dyn_a.update(q0, np.zeros(7))
+    good = {"q": q0, "dq": np.zeros(7), "tau_measured": dyn_a.gravity.copy(),
+            "pos_target_world": dyn_a.pos_ee_world.copy(),
+            "quat_target_world": matrix_to_quat(dyn_a.rot_ee_world),
+            "wrench_cmd_world": np.zeros(6)}
+    with pytest.raises(InvalidArgumentError, match=f"{field} must have shape"):
+        ctrl.compute(**{**good, field: value})
+    np.testing.assert_array_equal(_tick(ctrl, dyn_a, q0), _tick(fresh, dyn_b, q0))

@@ -103,6 +103,14 @@ def limit_torch_threads() -> None:
         torch.set_num_threads(1)
 
 
+def _check_shapes(**arrays: tuple[np.ndarray | None, int]) -> None:
+    """One-line ``InvalidArgumentError`` unless each given array has shape ``(n,)``: the numba
+    kernels index fixed sizes, so a short array would be read out of bounds."""
+    for name, (value, n) in arrays.items():
+        if value is not None and np.shape(value) != (n,):
+            raise InvalidArgumentError(f"{name} must have shape ({n},), got {np.shape(value)}")
+
+
 class ImpactController:
     """Torque controller of the IMPACT paper for a 7-DoF arm.
 
@@ -232,6 +240,10 @@ class ImpactController:
         f64 = np.float64
         q = np.asarray(q, dtype=f64)
         dq = np.asarray(dq, dtype=f64)
+        _check_shapes(q=(q, 7), dq=(dq, 7), tau_measured=(tau_measured, 7),
+                      pos_target_world=(pos_target_world, 3),
+                      quat_target_world=(quat_target_world, 4),
+                      wrench_cmd_world=(wrench_cmd_world, 6))
         dyn, model = self.dynamics, self.internal_model
         chain = getattr(dyn, "chain_params", None)
         if chain is None:
