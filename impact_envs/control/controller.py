@@ -237,26 +237,11 @@ class ImpactController:
         """
         if not self._is_reset:
             raise InvalidArgumentError("invalid call order; valid: reset(q0) before compute()")
-        f64 = np.float64
-        q = np.asarray(q, dtype=f64)
-        dq = np.asarray(dq, dtype=f64)
-        _check_shapes(q=(q, 7), dq=(dq, 7), tau_measured=(tau_measured, 7),
-                      pos_target_world=(pos_target_world, 3),
-                      quat_target_world=(quat_target_world, 4),
-                      wrench_cmd_world=(wrench_cmd_world, 6))
-        dyn, model = self.dynamics, self.internal_model
+        dyn = self.dynamics
         chain = getattr(dyn, "chain_params", None)
-        if chain is None:
-            dyn.update(q, dq)
-        cmd = self._zeros6 if wrench_cmd_world is None else np.asarray(wrench_cmd_world, f64)
-        mask = model.mask_array(learn_mask)
-        fric = dyn.joint_friction(dq) if self._include_friction else self._zeros7
-        args = (
-            q, dq, np.asarray(tau_measured, f64), np.asarray(pos_target_world, f64),
-            np.asarray(quat_target_world, f64), cmd, mask, float(gripper_width_m),
-            np.asarray(fric, f64), dynamics_arrays(dyn), *self._stage_buffers,
-            *model.kernel_args(), *self._law_buffers,
-        )  # fmt: skip
+        mask = self.internal_model.mask_array(learn_mask)
+        args = self._kernel_args(q, dq, tau_measured, pos_target_world, quat_target_world,
+                                 wrench_cmd_world, mask, gripper_width_m)
         if chain is None:
             flags = kernels.controller_tick(*args)
         else:  # the model update runs inside the same numba call
@@ -266,6 +251,30 @@ class ImpactController:
             self._after_tick(flags, quat_target_world, mask)
         self._fill_signals()
         return self.limiter.output.copy()
+
+    def _kernel_args(self, q: np.ndarray, dq: np.ndarray, tau_measured: np.ndarray,
+                     pos_target_world: np.ndarray, quat_target_world: np.ndarray,
+                     wrench_cmd_world: np.ndarray | None, mask: np.ndarray,
+                     gripper_width_m: float) -> tuple:
+        """Shape-checked float64 inputs and buffers of ``kernels.controller_tick`` (updates the
+        dynamics first where they are not computed inside the kernel)."""
+        f64 = np.float64
+        q, dq = np.asarray(q, dtype=f64), np.asarray(dq, dtype=f64)
+        _check_shapes(q=(q, 7), dq=(dq, 7), tau_measured=(tau_measured, 7),
+                      pos_target_world=(pos_target_world, 3),
+                      quat_target_world=(quat_target_world, 4),
+                      wrench_cmd_world=(wrench_cmd_world, 6))
+        dyn = self.dynamics
+        if getattr(dyn, "chain_params", None) is None:
+            dyn.update(q, dq)
+        cmd = self._zeros6 if wrench_cmd_world is None else np.asarray(wrench_cmd_world, f64)
+        fric = dyn.joint_friction(dq) if self._include_friction else self._zeros7
+        return (
+            q, dq, np.asarray(tau_measured, f64), np.asarray(pos_target_world, f64),
+            np.asarray(quat_target_world, f64), cmd, mask, float(gripper_width_m),
+            np.asarray(fric, f64), dynamics_arrays(dyn), *self._stage_buffers,
+            *self.internal_model.kernel_args(), *self._law_buffers,
+        )  # fmt: skip
 
     def fused_inputs(
         self,
