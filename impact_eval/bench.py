@@ -29,6 +29,7 @@ import mujoco
 import numpy as np
 
 import impact_envs
+from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.policies.protocol import stack_obs
 from impact_envs.policies.scripted import make_expert
@@ -175,7 +176,7 @@ def _check_args(args: argparse.Namespace) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="impact-bench", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="impact-bench", description=__doc__.splitlines()[0])
     parser.add_argument("--env", default="IMPACT/Hammer-v0", choices=impact_envs.ENV_IDS)
     parser.add_argument("--steps", type=int, default=300, help="policy steps (30 Hz) per run")
     parser.add_argument("--mass", type=float, default=2.5, help="object mass [kg]")

@@ -114,7 +114,14 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--resume",
         action="store_true",
-        help="continue OUT: skip (method, value, episode) rows already written",
+        help="continue OUT with the same methods, grid and episodes: skip (method, value, "
+        "episode) rows already written",
+    )
+    p.add_argument(
+        "--extend",
+        action="store_true",
+        help="continue OUT adding methods or grid values (every earlier one kept, same "
+        "--episodes): each new cell gets the same episode count",
     )
     p.add_argument(
         "--beyond-hardware-limits",
@@ -214,6 +221,7 @@ def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
         envs_per_worker=a.envs_per_worker,
         seed=a.seed,
         resume=a.resume,
+        extend=a.extend,
         controller_overrides=tuple(a.controller_set),
         beyond_hardware_limits=a.beyond_hardware_limits,
     )

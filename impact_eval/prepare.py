@@ -44,6 +44,8 @@ class SweepRequest:
     seed: int
     resume: bool
     controller_overrides: tuple[str, ...] = ()
+    extend: bool = False
+    """``--extend``: resume, and let methods and grid values grow (``check_resumable``)."""
     beyond_hardware_limits: bool = False
     """Allow ``--controller-set`` limits above the FR3's torque and torque-rate limits."""
 
@@ -102,9 +104,10 @@ def load_done(req: SweepRequest, env: EnvInfo, values: list[float]) -> set[csvio
     path = req.out / EPISODES_CSV
     if not path.exists():
         return set()
-    if not req.resume:
+    if not (req.resume or req.extend):
         raise InvalidArgumentError(
-            f"{path} already exists; pass --resume to continue it or choose another --out"
+            f"{path} already exists; pass --resume (or --extend) to continue it or choose "
+            "another --out"
         )
     index = {format_value(v): i for i, v in enumerate(values)}
     done = set()
@@ -175,10 +178,12 @@ def prepare(req: SweepRequest) -> Plan:
     specs = parse_methods(req.methods)
     info = _inspect_env(req, specs, values)
     check_out_dir(req.out)
-    previous = runinfo.read_run_json(req.out) if req.resume else None
-    runinfo.check_resumable(
-        previous, req.env_id, req.seed, info.param_name, req.controller_overrides
-    )
+    previous = runinfo.read_run_json(req.out) if req.resume or req.extend else None
+    identity = runinfo.RunIdentity(
+        env=req.env_id, seed=req.seed, param_name=info.param_name,
+        controller_overrides=tuple(req.controller_overrides),
+        methods=tuple(s.name for s in specs), values=tuple(values), episodes=req.episodes)
+    runinfo.check_resumable(previous, identity, extend=req.extend)
     done = load_done(req, info, values)
     _build_policies(req, specs, info.env_id)
     config = SweepConfig(

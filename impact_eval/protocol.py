@@ -39,7 +39,6 @@ minimum and maximum over the repeats; ``timeseries.csv`` and the figure show the
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from dataclasses import replace
@@ -50,6 +49,7 @@ import numpy as np
 import pandas as pd
 
 import impact_envs
+from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.protocol import stack_obs
 from impact_envs.policies.scripted import PickPlaceExpert, make_expert
@@ -269,7 +269,7 @@ def _check_masses(env_id: str, masses: tuple[float, ...]) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="impact-protocol", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="impact-protocol", description=__doc__.splitlines()[0])
     parser.add_argument("--env", default="IMPACT/Dumbbell-v0")
     parser.add_argument("--masses", default="2.5,2.5,5", help="one mass per episode [kg]")
     parser.add_argument("--seed", type=int, default=0)

@@ -7,6 +7,7 @@ import os
 import platform
 import subprocess
 import sys
+from dataclasses import asdict, dataclass
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
@@ -97,24 +98,55 @@ def write_run_json(out_dir: Path, data: dict) -> None:
     os.replace(tmp, path)
 
 
-def check_resumable(
-    previous: dict | None,
-    env_id: str,
-    seed: int,
-    param_name: str,
-    controller_overrides: tuple[str, ...] = (),
-) -> None:
-    """Refuse ``--resume`` into a run made with a different env, seed, parameter or
-    controller overrides."""
+@dataclass(frozen=True)
+class RunIdentity:
+    """What makes the cells of a sweep comparable; ``--resume`` must not change any of it."""
+
+    env: str
+    seed: int
+    param_name: str
+    controller_overrides: tuple[str, ...]
+    methods: tuple[str, ...]
+    values: tuple[float, ...]
+    episodes: int
+
+
+_EXTENDABLE = ("methods", "values")
+
+
+def check_resumable(previous: dict | None, now: RunIdentity, extend: bool = False) -> None:
+    """Refuse ``--resume`` into a run whose ``run.json`` arguments differ from ``now``.
+
+    With ``extend``, methods and values may grow (every earlier method kept; new values
+    appended after the earlier ones, whose positions fix the episode seeds): new cells get
+    the same episode count, so no cell ends with a different count. Keys missing from an
+    older ``run.json`` are not checked.
+    """
     if previous is None:
         return
     args = previous.get("args", {})
-    overrides = list(controller_overrides)
-    checks = (("env", env_id), ("seed", seed), ("param_name", param_name),
-              ("controller_overrides", overrides))
-    for key, now in checks:
-        if key in args and args[key] != now:
+    for key, value in asdict(now).items():
+        if key not in args:
+            continue
+        was = args[key]
+        now_list = list(value) if isinstance(value, tuple) else value
+        growable = key in _EXTENDABLE
+        if was == now_list or (growable and set(was) == set(now_list)):
+            continue
+        if extend and key == "methods":
+            missing = [v for v in was if v not in now_list]
+            if not missing:
+                continue
             raise InvalidArgumentError(
-                f"cannot resume: {key} was {args[key]!r} in run.json, now {now!r}; "
-                "use the same value or another --out"
-            )
+                f"cannot extend: methods {missing} of the run are missing; --extend keeps "
+                f"every earlier method (run.json: {was!r})")
+        if extend and key == "values":
+            if now_list[:len(was)] == was:
+                continue
+            raise InvalidArgumentError(
+                f"cannot extend: the grid must start with the run's values {was!r} (an "
+                "episode's seed follows its value's position); append new values after them")
+        hint = "; to add methods or grid values pass --extend" if growable else ""
+        raise InvalidArgumentError(
+            f"cannot resume: {key} was {was!r} in run.json, now {now_list!r}; use the same "
+            f"value (every cell keeps one episode count) or another --out{hint}")

@@ -138,15 +138,6 @@ def test_cli(data_path, tmp_path, capsys):
     assert len(_rows(out)) == 2
 
 
-def test_train_cli_bad_input_is_one_line(tmp_path, capsys):
-    with pytest.raises(SystemExit) as exc:
-        train_module.main(["--data", str(tmp_path / "missing.zarr"), "--out",
-                           str(tmp_path / "run"), "--steps", "2", "--no-progress"])
-    assert exc.value.code == 2
-    err = capsys.readouterr().err
-    assert err.startswith("impact-train: error: dataset") and err.count("\n") == 1
-
-
 def test_graded_gripper_demos_need_binary_gripper_off(tmp_path, capsys):
     """binary_gripper (default) would execute only the sign of a graded gripper command: refuse
     such demos with a one-line error naming the setting; with it off they train."""

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import zipfile
 from pathlib import Path
 
 import pandas as pd
@@ -13,7 +12,6 @@ from test_eval_fake import ENV_ID, run_cli
 
 from impact_envs.errors import InvalidArgumentError
 from impact_eval.cli import main
-from impact_eval.methods import CHECKPOINTS_ENV_VAR
 
 PLOTS = [
     "success_surface",
@@ -120,80 +118,11 @@ def _corrupt_checkpoint(root: Path) -> Path:
     return root
 
 
-BAD_INPUTS = {
-    "unknown env": (["--env", "IMPACT/Nope-v0"], "valid choices"),
-    "unknown method": (["--method", "fake_fast,dp"], "valid choices: scripted"),
-    "unknown parameter": (["--param", "friction"], "valid choices: object_mass"),
-    "malformed grid": (["--masses", "1:0.5"], "malformed grid"),
-    "rejected value": (["--masses", "0,2"], "object_mass=0.0 rejected"),
-    "zero episodes": (["--episodes", "0"], "--episodes must be >= 1"),
-    "missing checkpoint": (["--method", "vanilla_dp"], "no vanilla checkpoint"),
-    "corrupt checkpoint": (["--method", "impact"], "cannot load vanilla checkpoint"),
-    "corrupt sb3 zip": (["--method", "sb3:{tmp}/ppo.zip"], "cannot load SB3 checkpoint"),
-    "sb3 zip without opt-in": (["--method", "sb3:{tmp}/ppo.zip"], "pass --trust-sb3"),
-    "missing sb3 zip": (["--method", "sb3:{tmp}/nope.zip"], "does not exist"),
-    "out under a file": (["--out", "{tmp}/afile/sub"], "not writable"),
-    "out on /proc": (["--out", "/proc/impact-eval-test"], "not writable"),
-    "unknown option": (["--mases", "1"], "unrecognized arguments"),
-    "unknown controller field": (
-        ["--controller-set", "internal_model.lr=1"],
-        "unknown field 'lr' of controller config section 'internal_model'; valid:",
-    ),
-    "no scripted expert": (["--method", "scripted"], "cannot build method 'scripted'"),
-    "torque above the FR3": (
-        ["--controller-set", "limits.torque_max_nm=1000,87,87,87,12,12,12"],
-        "limits.torque_max_nm[0]=1000 > 87 Nm: above the FR3's hardware limits",
-    ),
-    "torque rate above the FR3": (
-        ["--controller-set", "limits.torque_rate_max_nm_per_s=5000"],
-        "pass --beyond-hardware-limits",
-    ),
-}
-
-
-@pytest.mark.parametrize("case", list(BAD_INPUTS))
-def test_bad_input_exits_2_without_files(
-    case: str, tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    (tmp_path / "afile").write_text("x")
-    with zipfile.ZipFile(tmp_path / "ppo.zip", "w") as z:
-        z.writestr("data", "garbage")
-    root = tmp_path / "ckpt"
-    monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(_corrupt_checkpoint(root)))
-    if case == "missing checkpoint":
-        monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(tmp_path / "empty"))
-    if case == "corrupt sb3 zip":
-        monkeypatch.setenv("IMPACT_TRUST_SB3", "1")  # as --trust-sb3 does
-    else:
-        monkeypatch.delenv("IMPACT_TRUST_SB3", raising=False)
-    extra, message = BAD_INPUTS[case]
-    out = tmp_path / "out"
-    args = sweep_args(out, "--workers", "1")
-    overrides = [a.replace("{tmp}", str(tmp_path)) for a in extra]
-    for flag, value in zip(overrides[::2], overrides[1::2], strict=False):
-        if flag in args:
-            args[args.index(flag) + 1] = value
-        else:
-            args += [flag, value]
-    before = sorted(p.name for p in tmp_path.iterdir())
-    assert main(args) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("impact-eval: error:"), err
-    assert message in err
-    assert sorted(p.name for p in tmp_path.iterdir()) == before
-    assert not Path("/proc/impact-eval-test").exists()
-
-
 def test_bad_input_in_a_real_process(tmp_path: Path) -> None:
     proc = run_cli(*sweep_args(tmp_path / "out", "--method", "nope"))
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "valid choices" in proc.stderr
     assert proc.stdout == "" and not (tmp_path / "out").exists()
-
-
-def test_report_of_missing_dir_is_bad_input(tmp_path: Path) -> None:
-    assert main(["report", str(tmp_path / "nothing")]) == 2
-    assert not (tmp_path / "nothing").exists()
 
 
 def test_missing_sweep_options_name_quick(capsys):

@@ -14,6 +14,8 @@ import pytest
 from test_eval_cli import sweep_args
 from test_eval_fake import REPO, cli_env, run_cli
 
+from impact_eval.cli import main
+
 
 def _rows(path: Path) -> int:
     """Complete data rows in a CSV being written (0 if it does not exist yet)."""
@@ -75,3 +77,44 @@ def test_sigkill_then_resume_equals_uninterrupted_run(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     assert f"({done} already done, {total} in total)" in proc.stdout
     assert (killed / "episodes.csv").read_text() == (reference / "episodes.csv").read_text()
+
+
+@pytest.mark.parametrize("change, message", [
+    (("--method", "fake_fast"), "cannot resume: methods"),
+    (("--episodes", "6"), "cannot resume: episodes was 5"),
+    (("--masses", "0.5,3"), "cannot resume: values"),
+    (("--seed", "12"), "cannot resume: seed"),
+])
+def test_resume_refuses_changes_that_mix_episode_counts(tmp_path, capsys, change, message):
+    out = tmp_path / "run"
+    args = sweep_args(out, "--workers", "1", masses="0.5,2")
+    args[args.index("--method") + 1] = "fake_fast,fake_impact"
+    assert main(args) == 0
+    before = (out / "episodes.csv").read_bytes(), (out / "run.json").read_bytes()
+    changed = [*args, "--resume"]
+    changed[changed.index(change[0]) + 1] = change[1]
+    capsys.readouterr()
+    assert main(changed) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
+    if change[0] in ("--method", "--masses"):
+        assert "pass --extend" in err
+    assert ((out / "episodes.csv").read_bytes(), (out / "run.json").read_bytes()) == before
+
+
+def test_extend_adds_methods_and_appended_values_with_full_cells(tmp_path, capsys):
+    out, full = tmp_path / "run", tmp_path / "full"
+    args = sweep_args(out, "--workers", "1", masses="0.5,2")
+    args[args.index("--method") + 1] = "fake_fast,fake_impact"
+    assert main(args) == 0
+    grown = sweep_args(out, "--workers", "1", masses="0.5,2,3.5")
+    assert main([*grown, "--resume"]) == 2  # growing needs --extend
+    assert main([*sweep_args(out, "--workers", "1", masses="2,0.5,3.5"), "--extend"]) == 2
+    assert "the grid must start with" in capsys.readouterr().err
+    assert main([*grown, "--extend"]) == 0
+    assert main(sweep_args(full, "--workers", "1", masses="0.5,2,3.5")) == 0
+    assert (out / "episodes.csv").read_text() == (full / "episodes.csv").read_text()
+    dropped = [*grown, "--extend"]
+    dropped[dropped.index("--method") + 1] = "fake_fast,fake_slow"
+    assert main(dropped) == 2
+    assert "methods ['fake_impact'] of the run are missing" in capsys.readouterr().err

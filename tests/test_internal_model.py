@@ -211,3 +211,29 @@ def test_wrench_feature_off_hides_the_estimated_wrench_from_the_network() -> Non
     model.push(q, dq, 0.03, p, np.zeros(6))
     np.testing.assert_array_equal(model.history_input(), with_load)  # same input either way
     assert InternalModel().config.wrench_feature  # both presets see it
+
+
+def test_a_diverging_sgd_step_reinitializes_instead_of_feeding_non_finite_weights() -> None:
+    """Inputs far outside any payload (a 1e5 N wrench, saturated features) make plain SGD at
+    lr 0.1 diverge; the step that leaves a non-finite loss or weight restores the seeded
+    model, so the prediction fed forward stays finite."""
+    model = InternalModel()
+    fresh = [w.copy() for w in model.kernel_args()[1]]
+    huge = np.array([1e5, -1e5, 1e5, 1e4, -1e4, 1e4])
+    for _ in range(3000):
+        model.push(Q * 10.0, np.full(7, 100.0), 1.0, POS * 100.0, huge)
+        model.train_step(model.history_input(), (huge / 10.0).astype(np.float32),
+                         np.ones(6, np.float32))
+        assert np.all(np.isfinite(model.predict()))
+        if model.n_divergences:
+            break
+    assert model.n_divergences == 1
+    assert model.replay.count == 0 and model.n_updates == 0
+    for w, w0 in zip(model.kernel_args()[1], fresh, strict=True):
+        np.testing.assert_array_equal(w, w0)
+
+
+@pytest.mark.parametrize("mask", [np.ones(3), np.full(6, np.nan), np.full(6, 2.0), 1.0])
+def test_learn_mask_must_be_six_weights_in_unit_interval(mask) -> None:
+    with pytest.raises(InvalidArgumentError, match="invalid learn_mask"):
+        InternalModel().mask_array(mask)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from impact_envs.control.config import ControllerConfig
@@ -56,7 +58,7 @@ def test_bad_overrides_are_one_line_errors(item: str, message: str) -> None:
 
 def test_make_env_applies_overrides_and_resume_refuses_other_overrides() -> None:
     from impact_eval.envs import make_env
-    from impact_eval.runinfo import check_resumable
+    from impact_eval.runinfo import RunIdentity, check_resumable
 
     env = make_env("IMPACT/Hammer-v0", "impact", ("internal_model.slow_rate_max=1.5",))
     assert env.unwrapped.controller.config.internal_model.slow_rate_max == 1.5
@@ -72,8 +74,8 @@ def test_make_env_applies_overrides_and_resume_refuses_other_overrides() -> None
             "controller_overrides": [],
         }
     }
-    check_resumable(previous, "IMPACT/Hammer-v0", 0, "object_mass", ())
+    same = RunIdentity("IMPACT/Hammer-v0", 0, "object_mass", (), ("impact",), (1.0,), 5)
+    check_resumable(previous, same)
     with pytest.raises(InvalidArgumentError, match="controller_overrides"):
-        check_resumable(
-            previous, "IMPACT/Hammer-v0", 0, "object_mass", ("slow_wrench.clip_force_n=5",)
-        )
+        other = ("slow_wrench.clip_force_n=5",)
+        check_resumable(previous, replace(same, controller_overrides=other))

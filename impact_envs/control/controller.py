@@ -19,13 +19,15 @@ from impact_envs.control.config import ControllerConfig
 from impact_envs.control.estimators import make_estimator
 from impact_envs.control.impedance import CartesianImpedance
 from impact_envs.control.internal_model import InternalModel
+from impact_envs.control.kernel_layout import INPUT_ABS_MAX
 from impact_envs.control.lie import invalid_quaternion
 from impact_envs.control.limits import TorqueLimiter
 from impact_envs.control.protocols import ArmDynamics, dynamics_arrays
 from impact_envs.control.slow_filter import SlowWrenchFilter
 from impact_envs.errors import InvalidArgumentError, SimulationError, check_choice
 
-__all__ = ["MODES", "ArmDynamics", "ControllerSignals", "ImpactController", "Mode"]
+__all__ = ["INPUT_ABS_MAX", "MODES", "ArmDynamics", "ControllerSignals", "ImpactController",
+           "Mode", "describe_bad_input"]
 
 Mode = Literal["impact", "impedance"]
 MODES: tuple[str, ...] = ("impact", "impedance")
@@ -109,6 +111,21 @@ def _check_shapes(**arrays: tuple[np.ndarray | None, int]) -> None:
     for name, (value, n) in arrays.items():
         if value is not None and np.shape(value) != (n,):
             raise InvalidArgumentError(f"{name} must have shape ({n},), got {np.shape(value)}")
+
+
+def describe_bad_input(q: np.ndarray, dq: np.ndarray, tau_measured: np.ndarray,
+                       pos_target_world: np.ndarray, quat_target_world: np.ndarray,
+                       wrench_cmd_world: np.ndarray, gripper_width_m: float) -> str:
+    """One line naming the first input outside ``INPUT_ABS_MAX`` (the kernels' check)."""
+    values = (q, dq, tau_measured, pos_target_world, quat_target_world, wrench_cmd_world)
+    arrays = [np.asarray(v, dtype=np.float64) for v in values]
+    i = int(kernels.first_bad_input(*arrays, float(gripper_width_m)))
+    if i < 0:
+        return "every input within range"
+    name, bound, unit = INPUT_ABS_MAX[i]
+    value = gripper_width_m if i == 6 else arrays[i].tolist()
+    return (f"invalid {name} {value}; valid: finite values with |x| <= {bound:g}"
+            + (f" {unit}" if unit else ""))
 
 
 class ImpactController:
@@ -232,7 +249,9 @@ class ImpactController:
             Torque command (7,) [Nm] after torque-rate limiting and saturation (a new array).
 
         Raises:
-            InvalidArgumentError: If the target quaternion is zero or not finite.
+            InvalidArgumentError: If an array has the wrong shape, an input is not finite or
+                beyond ``INPUT_ABS_MAX`` (the controller is then left as it was), or the
+                target quaternion is zero.
             SimulationError: If the command is not finite.
         """
         if not self._is_reset:
@@ -247,6 +266,8 @@ class ImpactController:
         else:  # the model update runs inside the same numba call
             flags = kernels.controller_tick_chain(chain, dyn.chain_work, bool(dyn.need_coriolis),
                                                   *dyn.chain_state, *args)
+        if flags & kernels.BAD_INPUT:
+            raise InvalidArgumentError(describe_bad_input(*args[:6], args[7]))
         if flags:
             self._after_tick(flags, quat_target_world, mask)
         self._fill_signals()

@@ -13,6 +13,7 @@ without copying.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -34,7 +35,7 @@ from impact_envs.control.internal_model_net import (
 )
 from impact_envs.control.replay import ReplayBuffer
 from impact_envs.control.surprise_gate import SurpriseGate
-from impact_envs.errors import CheckpointError
+from impact_envs.errors import CheckpointError, InvalidArgumentError
 
 __all__ = [
     "FEATURE_DIM",
@@ -71,6 +72,9 @@ class InternalModel:
         learning_enabled: Set False to freeze the weights (prediction and surprise keep
             running; the gate holds its state).
         n_updates: SGD steps taken since construction / ``reinitialize``.
+        n_divergences: SGD steps whose loss or resulting weights were not finite; each one
+            re-initialises the model (seeded weights, empty replay), so a diverging learner
+            can never feed a non-finite prediction forward.
     """
 
     def __init__(self, config: InternalModelConfig | None = None) -> None:
@@ -81,6 +85,7 @@ class InternalModel:
         self.net = build_network(cfg)
         self.replay = ReplayBuffer(cfg.replay_capacity, self.input_dim, 6, seed=cfg.seed)
         self.n_updates = 0
+        self.n_divergences = 0
         self._init_kernel_buffers()
         self.gate = SurpriseGate(cfg.surprise_open_n, cfg.surprise_release_n, cfg.slow_rate_max,
                                  state=self._state[3:4])
@@ -228,7 +233,11 @@ class InternalModel:
         """float32 (6,) learning mask: ones for None, else a copy of ``learn_mask``."""
         if learn_mask is None:
             return self._ones
-        self._mask[:] = learn_mask
+        mask = np.asarray(learn_mask, dtype=np.float64)
+        if mask.shape != (6,) or not np.all((mask >= 0.0) & (mask <= 1.0)):
+            raise InvalidArgumentError(f"invalid learn_mask {learn_mask!r}; valid: None or 6 "
+                                       "bools / weights in [0, 1], one per wrench axis")
+        self._mask[:] = mask
         return self._mask
 
     def learn(self, flags: int, wrench_slow_world: np.ndarray, mask: np.ndarray) -> None:
@@ -255,9 +264,17 @@ class InternalModel:
             np.take(self.replay.inputs, idx, axis=0, out=bx[1:])
             np.take(self.replay.targets, idx, axis=0, out=by[1:])
             np.take(self.replay.masks, idx, axis=0, out=bm[1:])
-        loss = sgd_step(self._weights, self._biases, bx, by, bm, self.config.learning_rate)
+        with np.errstate(over="ignore", invalid="ignore"):  # divergence is handled below
+            loss = sgd_step(self._weights, self._biases, bx, by, bm, self.config.learning_rate)
         self.n_updates += 1  # the fast path shares the weights' memory: no refresh
+        if not (math.isfinite(loss) and self._parameters_finite()):
+            self.reinitialize()  # diverged (inputs far outside any payload): start over
+            self.n_divergences += 1
         return loss
+
+    def _parameters_finite(self) -> bool:
+        """Whether every weight and bias is finite (~6 us, once per SGD step)."""
+        return all(np.isfinite(a).all() for a in (*self._weights, *self._biases))
 
     # ----------------------------------------------------------------- persistence
     def snapshot(self) -> ModelSnapshot:

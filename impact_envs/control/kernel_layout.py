@@ -18,6 +18,25 @@ BAD_QUAT = 4
 """The target quaternion is zero or not finite; nothing was updated."""
 NON_FINITE = 8
 """The torque command is not finite."""
+BAD_INPUT = 16
+"""An input is not finite or outside ``INPUT_ABS_MAX``; nothing was updated."""
+
+# Largest magnitude accepted per input element. Generous physical bounds (the FR3 reaches
+# |q| < 4.6 rad, |dq| < 2.7 rad/s, |tau| < 87 Nm): beyond them the readings are not a robot's,
+# and the float arithmetic of the stages could overflow into non-finite state.
+INPUT_ABS_MAX = (
+    ("q", 10.0, "rad"),
+    ("dq", 100.0, "rad/s"),
+    ("tau_measured", 1000.0, "Nm"),
+    ("pos_target_world", 10.0, "m"),
+    ("quat_target_world", 1000.0, ""),
+    ("wrench_cmd_world", 10000.0, "N, Nm"),
+    ("gripper_width_m", 1.0, "m"),
+)
+"""(argument, bound, unit) in the order ``kernels.first_bad_input`` checks them."""
+Q_ABS_MAX, DQ_ABS_MAX, TAU_ABS_MAX, POS_ABS_MAX, QUAT_ABS_MAX, WRENCH_ABS_MAX, WIDTH_ABS_MAX = (
+    bound for _, bound, _ in INPUT_ABS_MAX
+)
 
 
 # --------------------------------------------------------------------------- buffer layouts

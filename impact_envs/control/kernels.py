@@ -26,12 +26,20 @@ from numba import njit
 
 from impact_envs.control.chain_dynamics import chain_terms
 from impact_envs.control.kernel_layout import (
+    BAD_INPUT,
     BAD_QUAT,
     CONTROLLER_SIZE,
+    DQ_ABS_MAX,
     NON_FINITE,
+    POS_ABS_MAX,
+    Q_ABS_MAX,
+    QUAT_ABS_MAX,
     SLOW_FILTER_SIZE,
     STORE,
+    TAU_ABS_MAX,
     TRAIN,
+    WIDTH_ABS_MAX,
+    WRENCH_ABS_MAX,
     controller_views,
     impedance_size,
     impedance_views,
@@ -70,8 +78,10 @@ from impact_envs.control.kernel_stages import (
 )
 
 __all__ = [
-    "BAD_QUAT", "CONTROLLER_SIZE", "NON_FINITE", "SLOW_FILTER_SIZE", "STORE", "TRAIN",
-    "controller_tick", "controller_tick_chain", "controller_views", "gate_update",
+    "BAD_INPUT", "BAD_QUAT", "CONTROLLER_SIZE", "NON_FINITE", "SLOW_FILTER_SIZE", "STORE",
+    "TRAIN",
+    "controller_tick", "controller_tick_chain", "controller_views", "first_bad_input",
+    "gate_update",
     "impedance_law", "impedance_size", "impedance_views", "limit_rate", "limiter_size",
     "limiter_views", "matrix_to_quat", "mlp_forward", "model32_size", "model32_views",
     "model_gate_step", "model_predict", "model_size", "model_views", "momentum_size",
@@ -82,6 +92,35 @@ __all__ = [
 
 
 # ------------------------------------------------------------------------------ controller
+@njit(cache=True)
+def _over(values, bound) -> bool:
+    """Whether some element is not finite or |element| > bound (NaN fails every comparison)."""
+    for v in values:  # noqa: SIM110 (numba compiles no generator expression in any())
+        if not abs(v) <= bound:
+            return True
+    return False
+
+
+@njit(cache=True)
+def first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, gripper_width) -> int:
+    """Index into ``INPUT_ABS_MAX`` of the first input out of its bound, or -1 if all pass."""
+    if _over(q, Q_ABS_MAX):
+        return 0
+    if _over(dq, DQ_ABS_MAX):
+        return 1
+    if _over(tau_meas, TAU_ABS_MAX):
+        return 2
+    if _over(pos_target, POS_ABS_MAX):
+        return 3
+    if _over(quat_target, QUAT_ABS_MAX):
+        return 4
+    if _over(wrench_cmd, WRENCH_ABS_MAX):
+        return 5
+    if not abs(gripper_width) <= WIDTH_ABS_MAX:
+        return 6
+    return -1
+
+
 @njit(cache=True)
 def controller_tick(
     q, dq, tau_meas, pos_target, quat_target, wrench_cmd, mask, gripper_width, fric, dyn,
@@ -94,6 +133,8 @@ def controller_tick(
     Without "run internal model" (mode "impedance") the model is skipped entirely.
     """
     par, sig_cmd, w_extra, scalars, w_ff = controller_views(ctl)
+    if first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, gripper_width) >= 0:
+        return BAD_INPUT
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
     regularized_wrench_map(dyn[0], par[0], grams[0], wrench_maps[0])
@@ -140,8 +181,11 @@ def controller_tick_chain(
     """``chain_terms`` (the model update, into ``dyn``) then ``controller_tick``: one call.
 
     ``chain`` is ``ChainParams.arrays()``; ``q_model`` / ``dq_model`` receive copies of q, dq
-    (the state the model was evaluated at).
+    (the state the model was evaluated at). Inputs out of range return ``BAD_INPUT`` before
+    the model is touched.
     """
+    if first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, gripper_width) >= 0:
+        return BAD_INPUT
     for i in range(q.shape[0]):
         q_model[i] = q[i]
         dq_model[i] = dq[i]

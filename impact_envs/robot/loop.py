@@ -12,8 +12,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.kernels import BAD_QUAT, NON_FINITE, controller_tick_chain, limiter_views
+from impact_envs.control.controller import ImpactController, describe_bad_input
+from impact_envs.control.kernels import (
+    BAD_INPUT,
+    BAD_QUAT,
+    NON_FINITE,
+    controller_tick_chain,
+    limiter_views,
+)
+from impact_envs.errors import SimulationError
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.robot.sim_kernels import actuate, sense
 
@@ -71,7 +78,7 @@ def fused_tick(
         qpos[finger_i] + qpos[finger_j], fric_model, dyn, ctl, grams, wrench_maps, est, sf,
         model32, weights, biases, model, imp, lim,
     )  # fmt: skip
-    if not flags & (BAD_QUAT | NON_FINITE):
+    if not flags & (BAD_INPUT | BAD_QUAT | NON_FINITE):
         actuate(limiter_views(lim)[3], torque_limits, tau_applied, ctrl, arm_act, gripper_act,
                  gripper_cmd)
     for j in range(n):
@@ -101,8 +108,9 @@ class FusedTicks:
                  learn_mask: np.ndarray | None) -> None:
         self.sim, self.controller, self.learn_mask = sim, controller, learn_mask
         self.sensed = np.empty(21)
-        self._quats, self._qvels = quat_targets, qvels
+        self._quats, self._qvels, self._pos = quat_targets, qvels, pos_targets
         head, tail = inputs
+        self._wrench_cmd = tail[0]
         self._static = (noise, pos_targets, quat_targets, taus, qvels, *sim.fused_args(),
                         float(gripper_cmd), self.sensed, *head, *tail)
 
@@ -110,6 +118,12 @@ class FusedTicks:
         """Tick ``i``: sense, control, actuate, step physics (signals: call ``finish``)."""
         sim = self.sim
         flags = fused_tick(i, sim.friction_torque(), *self._static)
+        if flags & BAD_INPUT:  # the action was validated on entry: the sensed state is off
+            s = self.sensed
+            raise SimulationError(f"controller input out of range at tick {i}: "
+                                  + describe_bad_input(s[:7], s[7:14], s[14:], self._pos[i],
+                                                       self._quats[i], self._wrench_cmd,
+                                                       sim.gripper_width()))
         if flags:
             self.controller.finish_tick(flags, self._quats[i], self.learn_mask)
         sim.step()

@@ -12,20 +12,26 @@ Attempt ``k`` uses env seed ``SeedSequence([seed, k])`` and a parameter drawn fr
 ``SeedSequence([seed, k, 1])`` (``--mass-range``), ``values[k % len]`` (``--mass-list``) or the
 fixed ``--mass``. Attempts run ``--n-envs`` at a time in lockstep; the successful episodes of
 each batch are appended in attempt order, so ``--resume`` reproduces an uninterrupted run.
+Demos are written to ``OUT.partial``, which is renamed to ``OUT`` once every requested demo is
+stored: ``OUT`` is always a complete store.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import shutil
 from collections.abc import Callable
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+import zarr
 from tqdm import tqdm
 
 import impact_envs
-from impact_envs.errors import ImpactError
+from impact_envs.cli import OneLineParser
+from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.policies.diffusion.collect_config import CollectConfig, parse_param_spec
 from impact_envs.policies.diffusion.collect_run import AttemptSpec, Expert, run_attempts
 from impact_envs.policies.diffusion.dataset import EpisodeMeta, ReplayWriter
@@ -121,7 +127,7 @@ def collect(
     _check_param_values(envs[0], param_name, cfg)
     space = envs[0].observation_space
     obs_dims = {k: int(np.prod(s.shape)) for k, s in space.spaces.items()}
-    writer = ReplayWriter(cfg.out, obs_dims, store_attrs(cfg, param_name), append=cfg.resume)
+    writer = _open_store(cfg, obs_dims, store_attrs(cfg, param_name))
     attempts = writer.attempts()
     attempt = max(int(writer.root.attrs.get("n_attempts", 0)), int(attempts.max(initial=-1)) + 1)
     bar = tqdm(total=cfg.episodes, initial=writer.n_episodes, disable=not cfg.progress)
@@ -146,12 +152,53 @@ def collect(
         bar.close()
         for env in envs:
             env.close()
-    return writer.n_episodes
+    stored = writer.n_episodes
+    if stored >= cfg.episodes:
+        os.replace(writer.path, cfg.out)  # the store appears under --out only when complete
+    return stored
+
+
+def partial_path(out: str | Path) -> Path:
+    """Where a collection writes until it is complete: ``OUT.partial``."""
+    return Path(f"{out}.partial")
+
+
+def _stored_episodes(path: Path) -> int:
+    """Complete episodes in a store (0 when it cannot be read, e.g. torn at creation)."""
+    try:
+        return int(zarr.open_group(str(path), mode="r")["meta/episode_ends"].shape[0])
+    except (KeyError, OSError, ValueError, zarr.errors.BaseZarrError):
+        return 0
+
+
+def _open_store(cfg: CollectConfig, obs_dims: dict[str, int], attrs: dict) -> ReplayWriter:
+    """The writer on ``OUT.partial`` (renamed to ``OUT`` when complete).
+
+    A partial store without a complete episode (a run that failed early) is replaced; one
+    holding episodes is continued by ``--resume`` and otherwise refused. ``--resume`` on a
+    finished ``OUT`` checks its attributes, then moves it back to ``OUT.partial`` to append.
+    """
+    final, work = Path(cfg.out), partial_path(cfg.out)
+    if work.exists() and not cfg.resume:
+        n = _stored_episodes(work)
+        if n:
+            raise InvalidArgumentError(
+                f"{work} holds {n} episodes of an unfinished run; pass --resume to continue it "
+                "or delete it")
+        shutil.rmtree(work)
+    if final.exists():
+        if not cfg.resume:
+            raise InvalidArgumentError(f"{final} exists; pass --resume to append or remove it")
+        if work.exists():
+            raise InvalidArgumentError(f"both {final} and {work} exist; delete one of them")
+        ReplayWriter(final, obs_dims, attrs, append=True)  # refuses other attributes here
+        os.replace(final, work)
+    return ReplayWriter(work, obs_dims, attrs, append=cfg.resume)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """Command-line interface of ``impact-collect``."""
-    parser = argparse.ArgumentParser(prog="impact-collect", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="impact-collect", description=__doc__.splitlines()[0])
     parser.add_argument("--env", required=True, help="env id, e.g. IMPACT/Hammer-v0")
     parser.add_argument("--out", required=True, help="output store (*.zarr)")
     parser.add_argument("--episodes", type=int, default=200, help="successful demos to keep")
@@ -191,7 +238,8 @@ def main(argv: list[str] | None = None) -> None:
         parser.exit(2, f"impact-collect: error: {exc}\n")
     if stored < cfg.episodes:
         raise SystemExit(
-            f"only {stored}/{cfg.episodes} successful demos after {cfg.attempt_limit} attempts"
+            f"only {stored}/{cfg.episodes} successful demos after {cfg.attempt_limit} attempts; "
+            f"kept in {partial_path(cfg.out)} (--resume with a larger --max-attempts continues)"
         )
     print(f"{stored} demos in {cfg.out}")
 

@@ -60,8 +60,10 @@ class CollectConfig:
         given = [x is not None for x in (self.param, self.param_range, self.param_list)]
         if sum(given) > 1:
             raise InvalidArgumentError("give at most one of --mass, --mass-range, --mass-list")
-        if self.episodes < 1 or self.n_envs < 1 or self.post_success_steps < 0:
-            raise InvalidArgumentError("need episodes >= 1, n_envs >= 1, post_success_steps >= 0")
+        for flag, value, low in (("--episodes", self.episodes, 1), ("--n-envs", self.n_envs, 1),
+                                 ("--post-success-steps", self.post_success_steps, 0)):
+            if value < low:
+                raise InvalidArgumentError(f"{flag} must be >= {low}, got {value}")
         if self.seed < 0:
             raise InvalidArgumentError(f"--seed must be >= 0, got {self.seed}")
         if self.max_attempts is not None and self.max_attempts < 1:

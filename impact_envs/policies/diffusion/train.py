@@ -22,6 +22,7 @@ from pathlib import Path
 
 import torch
 
+from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError, TrainingError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.ema import EMA
@@ -59,8 +60,10 @@ class RunOptions:
     progress: bool = True
 
     def __post_init__(self) -> None:
-        if self.steps < 1 or self.checkpoint_every < 1 or self.val_every < 1:
-            raise InvalidArgumentError("steps, checkpoint_every and val_every must be >= 1")
+        for flag, value in (("--steps", self.steps), ("--checkpoint-every",
+                            self.checkpoint_every), ("--val-every", self.val_every)):
+            if value < 1:
+                raise InvalidArgumentError(f"{flag} must be >= 1, got {value}")
         if not 0.0 <= self.val_fraction < 1.0:
             raise InvalidArgumentError(f"val_fraction must be in [0, 1), got {self.val_fraction}")
 
@@ -170,7 +173,7 @@ def _maybe_export_best(
 
 def build_parser() -> argparse.ArgumentParser:
     """Command-line interface of ``impact-train``."""
-    parser = argparse.ArgumentParser(prog="impact-train", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="impact-train", description=__doc__.splitlines()[0])
     parser.add_argument("--data", required=True, help="demonstration store (DATA.zarr)")
     parser.add_argument("--out", required=True, help="output folder of the run")
     parser.add_argument("--steps", type=int, required=True, help="total optimizer steps")
