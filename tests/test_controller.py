@@ -319,3 +319,26 @@ def test_wrong_input_shapes_are_refused_before_the_kernel(field, value) -> None:
     with pytest.raises(InvalidArgumentError, match=f"{field} must have shape"):
         ctrl.compute(**{**good, field: value})
     np.testing.assert_array_equal(_tick(ctrl, dyn_a, q0), _tick(fresh, dyn_b, q0))
+
+
+@pytest.mark.parametrize("field, value", [
+    ("q", np.full(7, np.nan)), ("tau_measured", np.full(7, np.inf)),
+    ("wrench_cmd_world", np.array([np.inf, 0.0, 0.0, 0.0, 0.0, 0.0])),
+    ("wrench_cmd_world", np.full(6, 2e4)), ("dq", np.full(7, 1e300)),
+    ("gripper_width_m", np.nan),
+])
+def test_non_finite_or_out_of_range_input_is_refused_without_latching(field, value) -> None:
+    """One NaN reading or a +inf commanded wrench used to latch the controller (NaN in the
+    filters: every later tick raised) or saturate it; now the tick is refused, nothing
+    changes, and the next valid tick equals a fresh controller's."""
+    dyn_a, ctrl, q0 = _make("impact")
+    dyn_b, fresh, _ = _make("impact")
+    dyn_a.update(q0, np.zeros(7))
+    good = {"q": q0, "dq": np.zeros(7), "tau_measured": dyn_a.gravity.copy(),
+            "pos_target_world": dyn_a.pos_ee_world.copy(),
+            "quat_target_world": matrix_to_quat(dyn_a.rot_ee_world),
+            "wrench_cmd_world": np.zeros(6), "gripper_width_m": 0.04}
+    with pytest.raises(InvalidArgumentError, match=f"invalid {field} .*valid: finite values"):
+        ctrl.compute(**{**good, field: value})
+    for _ in range(3):
+        np.testing.assert_array_equal(_tick(ctrl, dyn_a, q0), _tick(fresh, dyn_b, q0))

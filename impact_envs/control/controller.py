@@ -286,9 +286,13 @@ class ImpactController:
                       quat_target_world=(quat_target_world, 4),
                       wrench_cmd_world=(wrench_cmd_world, 6))
         dyn = self.dynamics
-        if getattr(dyn, "chain_params", None) is None:
-            dyn.update(q, dq)
         cmd = self._zeros6 if wrench_cmd_world is None else np.asarray(wrench_cmd_world, f64)
+        if getattr(dyn, "chain_params", None) is None:  # else the kernel checks, then updates
+            inputs = (q, dq, np.asarray(tau_measured, f64), np.asarray(pos_target_world, f64),
+                      np.asarray(quat_target_world, f64), cmd)
+            if kernels.first_bad_input(*inputs, float(gripper_width_m)) >= 0:
+                raise InvalidArgumentError(describe_bad_input(*inputs, gripper_width_m))
+            dyn.update(q, dq)
         fric = dyn.joint_friction(dq) if self._include_friction else self._zeros7
         return (
             q, dq, np.asarray(tau_measured, f64), np.asarray(pos_target_world, f64),
