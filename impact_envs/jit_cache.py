@@ -2,7 +2,7 @@
 
 Numba's ``cache=True`` keys a compiled function on the timestamp of the file that *defines*
 it. A cached function that calls (and inlines) a kernel from another module is therefore
-loaded stale after only that other module changed: e.g. ``robot/loop.py::fused_tick``, which
+loaded stale after only that other module changed: e.g. ``loop/tick.py::loop_tick``, which
 inlines the whole controller tick from ``control/kernels*.py``, kept running an old
 controller after ``kernel_stages.py`` changed (numba documents this under "Cache
 invalidation"). This module stamps each cache directory with a digest of *all* kernel sources
@@ -24,12 +24,12 @@ from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 KERNEL_SOURCES = (
-    "control/chain_dynamics.py",
     "control/kernel_layout.py",
     "control/kernel_math.py",
     "control/kernel_stages.py",
     "control/kernels.py",
-    "robot/loop.py",
+    "loop/tick.py",
+    "robot/chain_dynamics.py",
     "robot/sim_kernels.py",
 )
 """Every module (relative to the package) that defines ``@njit`` functions; located without

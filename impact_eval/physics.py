@@ -25,9 +25,9 @@ from impact_envs.control.config import EstimatorConfig
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.lie import matrix_to_quat, so3_exp
 from impact_envs.control.presets import preset_config
+from impact_envs.loop import control_tick
 from impact_envs.robot.dynamics import PinocchioArm
 from impact_envs.robot.ik import HOME_Q, solve_ik
-from impact_envs.robot.loop import control_tick
 from impact_envs.robot.sim import FrankaSim, SensorNoise
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])

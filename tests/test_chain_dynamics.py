@@ -6,8 +6,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from impact_envs.control.chain_dynamics import ChainParams
 from impact_envs.errors import InvalidArgumentError
+from impact_envs.robot.chain_dynamics import ChainParams
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
 
 

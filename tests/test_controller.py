@@ -255,38 +255,6 @@ def test_with_pinocchio_arm_runs_and_holds_still() -> None:
         assert np.abs(wanted).max() > 1.0  # the 1 Nm/tick rate limit was active
 
 
-class _UnfusedArm:
-    """A PinocchioArm seen through the plain ``ArmDynamics`` protocol (no chain kernel)."""
-
-    def __init__(self, arm) -> None:
-        self._arm = arm
-
-    def __getattr__(self, name: str):
-        if name.startswith("chain_"):
-            raise AttributeError(name)
-        return getattr(self._arm, name)
-
-
-def test_fused_chain_kernel_equals_update_then_kernel() -> None:
-    """controller_tick_chain (model update inside the numba call) changes no number."""
-    dynamics = pytest.importorskip("impact_envs.robot.dynamics")
-    rng = np.random.default_rng(4)
-    q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
-    ctrls = [ImpactController(arm, ControllerConfig(), mode="impact")
-             for arm in (dynamics.PinocchioArm(), _UnfusedArm(dynamics.PinocchioArm()))]
-    assert hasattr(ctrls[0].dynamics, "chain_params")
-    assert not hasattr(ctrls[1].dynamics, "chain_params")
-    for ctrl in ctrls:
-        ctrl.reset(q0)
-    for _ in range(50):
-        q, dq = q0 + rng.normal(0, 0.01, 7), rng.normal(0, 0.1, 7)
-        tau = rng.normal(0, 5.0, 7)
-        pos, quat = np.array([0.5, 0.0, 0.4]), np.array([0.0, 1.0, 0.0, 0.0])
-        out = [c.compute(q, dq, tau, pos, quat, gripper_width_m=0.04) for c in ctrls]
-        np.testing.assert_array_equal(out[0], out[1])
-    np.testing.assert_array_equal(ctrls[0].dynamics.mass_matrix, ctrls[1].dynamics.mass_matrix)
-
-
 def test_beyond_hardware_limits_names_each_setting_above_the_fr3() -> None:
     from impact_envs.control.config import LimitsConfig, beyond_hardware_limits
 

@@ -23,7 +23,6 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
-from test_controller import _UnfusedArm
 
 from impact_envs.control import kernels
 from impact_envs.control.config import ControllerConfig
@@ -46,10 +45,8 @@ _ARM.update(Q0, np.zeros(7))
 NOMINAL = {"q": Q0, "dq": np.zeros(7), "tau_measured": _ARM.gravity.copy(),
            "pos_target_world": _ARM.pos_ee_world.copy(),
            "quat_target_world": matrix_to_quat(_ARM.rot_ee_world), "wrench_cmd_world": np.zeros(6)}
-CONTROLLERS = {(mode, path): ImpactController(arm, ControllerConfig(), mode=mode)
-               for mode in ("impact", "impedance")
-               for path, arm in (("chain", dynamics.PinocchioArm()),
-                                 ("plain", _UnfusedArm(dynamics.PinocchioArm())))}
+CONTROLLERS = {mode: ImpactController(dynamics.PinocchioArm(), ControllerConfig(), mode=mode)
+               for mode in ("impact", "impedance")}
 
 _element = st.one_of(
     st.floats(-1.0, 1.0),                                         # near nominal (scaled below)
@@ -139,10 +136,10 @@ def _check_limits(ctrl: ImpactController, out: np.ndarray, before: np.ndarray) -
 
 @settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-@given(mode=st.sampled_from(["impact", "impedance"]), path=st.sampled_from(["chain", "plain"]),
+@given(mode=st.sampled_from(["impact", "impedance"]),
        ticks=st.lists(_tick(), min_size=1, max_size=6))
-def test_compute_refuses_or_returns_limited_finite_torques(mode, path, ticks) -> None:
-    ctrl = CONTROLLERS[(mode, path)]
+def test_compute_refuses_or_returns_limited_finite_torques(mode, ticks) -> None:
+    ctrl = CONTROLLERS[mode]
     ctrl.reset(Q0)
     for tick in ticks:
         kwargs, refused = tick["kwargs"], _refused(tick["kwargs"])
@@ -168,12 +165,12 @@ def test_compute_refuses_or_returns_limited_finite_torques(mode, path, ticks) ->
 def test_bounds_checked_kernels_raise_on_a_short_array() -> None:
     """The slow run can see an out-of-bounds read: the kernel called directly (past the
     Python shape check) with a 1-element q raises IndexError."""
-    ctrl = CONTROLLERS[("impact", "plain")]
+    ctrl = CONTROLLERS["impact"]
     ctrl.reset(Q0)
     args = list(ctrl._kernel_args(*NOMINAL.values(), ctrl.internal_model.mask_array(None), 0.04))
     args[0] = np.zeros(1)
     with pytest.raises(IndexError):
-        kernels.controller_tick(*args)
+        kernels.controller_tick(*args, ctrl.kernel_state())
 
 
 @pytest.mark.slow

@@ -197,12 +197,3 @@ def test_expert_closed_loop_compensation_finds_the_sag_without_the_mass():
         make_expert("IMPACT/Hammer-v0", compensation="psychic")
 
 
-@pytest.mark.parametrize("env_id", ENV_IDS)
-def test_fused_tick_loop_equals_reference_loop(env_id):
-    """The one-numba-call tick path changes no number (expert episode prefix, IMPACT)."""
-    runs = []
-    for fused in (True, False):
-        env = gym.make(env_id, controller="impact")
-        env.unwrapped.fused_loop = fused
-        runs.append(_expert_rollout(env, env_id, seed=5, steps=60))
-    np.testing.assert_array_equal(runs[0], runs[1])

@@ -132,11 +132,11 @@ class ImpactController:
     """Torque controller of the IMPACT paper for a 7-DoF arm.
 
     ``compute`` updates the dynamics and then runs every stage in one numba call
-    (``kernels.controller_tick``; with a dynamics object that exposes ``chain_params``,
-    ``chain_work`` and ``chain_state`` (``PinocchioArm``) the model update is part of the same
-    call, ``kernels.controller_tick_chain``); only the internal model's replay insert and SGD
-    step run in Python/NumPy, on the ticks the kernel schedules them. Creating a controller calls
-    ``limit_torch_threads`` (torch intra-op threads := 1 when higher, process-wide).
+    (``kernels.controller_tick`` on ``kernel_state()``; the closed loop, ``impact_envs.loop``,
+    runs the same kernel inside its own per-tick call); only the internal model's replay
+    insert and SGD step run in Python/NumPy, on the ticks the kernel schedules them. Creating a
+    controller calls ``limit_torch_threads`` (torch intra-op threads := 1 when higher,
+    process-wide).
 
     Attributes:
         dynamics: Controller model, ``update``-d inside ``compute``.
@@ -193,10 +193,6 @@ class ImpactController:
         self.wrench_maps = np.zeros((2, 6, 7))  # estimator's (J J^T + l^2 I)^-1 J, projector's
         self._zeros6, self._zeros7 = np.zeros(6), np.zeros(7)
         self._include_friction = cfg.estimator.include_joint_friction
-        # kernels.controller_tick arguments around the internal model's (fixed arrays)
-        self._stage_buffers = (self.buffer, self._grams, self.wrench_maps,
-                               self.estimator.buffer, self.slow_filter.buffer)
-        self._law_buffers = (self.impedance.buffer, self.limiter.buffer)
 
     def reset(self, q0: np.ndarray, keep_internal_model: bool = False) -> None:
         """Start an episode at joint configuration ``q0`` [rad].
@@ -256,18 +252,10 @@ class ImpactController:
         """
         if not self._is_reset:
             raise InvalidArgumentError("invalid call order; valid: reset(q0) before compute()")
-        dyn = self.dynamics
-        chain = getattr(dyn, "chain_params", None)
         mask = self.internal_model.mask_array(learn_mask)
         args = self._kernel_args(q, dq, tau_measured, pos_target_world, quat_target_world,
                                  wrench_cmd_world, mask, gripper_width_m)
-        if chain is None:
-            flags = kernels.controller_tick(*args)
-        else:  # the model update runs inside the same numba call
-            flags = kernels.controller_tick_chain(chain, dyn.chain_work, bool(dyn.need_coriolis),
-                                                  *dyn.chain_state, *args)
-        if flags & kernels.BAD_INPUT:
-            raise InvalidArgumentError(describe_bad_input(*args[:6], args[7]))
+        flags = kernels.controller_tick(*args, self.kernel_state())
         if flags:
             self._after_tick(flags, quat_target_world, mask)
         self._fill_signals()
@@ -277,63 +265,59 @@ class ImpactController:
                      pos_target_world: np.ndarray, quat_target_world: np.ndarray,
                      wrench_cmd_world: np.ndarray | None, mask: np.ndarray,
                      gripper_width_m: float) -> tuple:
-        """Shape-checked float64 inputs and buffers of ``kernels.controller_tick`` (updates the
-        dynamics first where they are not computed inside the kernel)."""
+        """Checked float64 inputs of ``kernels.controller_tick`` (all but the state), after
+        updating the dynamics at (q, dq); a refused input leaves everything untouched."""
         f64 = np.float64
-        q, dq = np.asarray(q, dtype=f64), np.asarray(dq, dtype=f64)
         _check_shapes(q=(q, 7), dq=(dq, 7), tau_measured=(tau_measured, 7),
                       pos_target_world=(pos_target_world, 3),
                       quat_target_world=(quat_target_world, 4),
                       wrench_cmd_world=(wrench_cmd_world, 6))
-        dyn = self.dynamics
         cmd = self._zeros6 if wrench_cmd_world is None else np.asarray(wrench_cmd_world, f64)
-        if getattr(dyn, "chain_params", None) is None:  # else the kernel checks, then updates
-            inputs = (q, dq, np.asarray(tau_measured, f64), np.asarray(pos_target_world, f64),
-                      np.asarray(quat_target_world, f64), cmd)
-            if kernels.first_bad_input(*inputs, float(gripper_width_m)) >= 0:
-                raise InvalidArgumentError(describe_bad_input(*inputs, gripper_width_m))
-            dyn.update(q, dq)
-        fric = dyn.joint_friction(dq) if self._include_friction else self._zeros7
-        return (
-            q, dq, np.asarray(tau_measured, f64), np.asarray(pos_target_world, f64),
-            np.asarray(quat_target_world, f64), cmd, mask, float(gripper_width_m),
-            np.asarray(fric, f64), dynamics_arrays(dyn), *self._stage_buffers,
-            *self.internal_model.kernel_args(), *self._law_buffers,
-        )  # fmt: skip
-
-    def fused_inputs(
-        self,
-        wrench_cmd_world: np.ndarray | None = None,
-        learn_mask: np.ndarray | None = None,
-    ) -> tuple[tuple, tuple] | None:
-        """Arguments of ``kernels.controller_tick_chain`` for a caller that fuses sensing,
-        control and actuation into one numba call (``impact_envs.robot.loop``).
-
-        Returns ``(head, tail)``: the call is ``controller_tick_chain(*head, q, dq, tau,
-        pos_target, quat_target, *tail[:2], gripper_width, *tail[2:])``; ``None`` when this
-        controller cannot be fused (dynamics without a chain kernel, or a joint-friction model
-        in the estimator that is not identically zero). Pass the call's result to
-        ``finish_tick``: torques and signals are then exactly those ``compute`` gives for the
-        same readings (tested).
-        """
+        inputs = (np.asarray(q, f64), np.asarray(dq, f64), np.asarray(tau_measured, f64),
+                  np.asarray(pos_target_world, f64), np.asarray(quat_target_world, f64), cmd)
+        if kernels.first_bad_input(*inputs, float(gripper_width_m)) >= 0:
+            raise InvalidArgumentError(describe_bad_input(*inputs, gripper_width_m))
         dyn = self.dynamics
-        chain = getattr(dyn, "chain_params", None)
-        friction = self._include_friction and not getattr(dyn, "joint_friction_is_zero", False)
-        if chain is None or friction:
-            return None
+        dyn.update(inputs[0], inputs[1])
+        fric = dyn.joint_friction(inputs[1]) if self._include_friction else self._zeros7
+        return (*inputs, mask, float(gripper_width_m), np.asarray(fric, f64),
+                dynamics_arrays(dyn))
+
+    def kernel_state(self) -> kernels.ControllerState:
+        """The buffers of ``kernels.controller_tick`` as one named structure (views: what the
+        kernel writes is this controller's state)."""
+        model32, weights, biases, model = self.internal_model.kernel_args()
+        return kernels.ControllerState(
+            ctl=self.buffer, grams=self._grams, wrench_maps=self.wrench_maps,
+            est=self.estimator.buffer, sf=self.slow_filter.buffer, model32=model32,
+            weights=weights, biases=biases, model=model, imp=self.impedance.buffer,
+            lim=self.limiter.buffer)
+
+    def loop_inputs(self, wrench_cmd_world: np.ndarray | None = None,
+                    learn_mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(wrench_cmd_world, learn mask)`` as ``controller_tick`` reads them, for a caller
+        that runs sensing, the model update, this kernel and actuation in one numba call per
+        tick (``impact_envs.loop``); pass each call's status bits to ``finish_tick``: torques
+        and signals are then exactly those ``compute`` gives for the same readings (tested).
+
+        Raises:
+            InvalidArgumentError: Before ``reset``, or when the estimator models joint
+                friction that is not identically zero (the loop feeds none).
+        """
         if not self._is_reset:
             raise InvalidArgumentError("invalid call order; valid: reset(q0) before compute()")
+        if self._include_friction and not getattr(self.dynamics, "joint_friction_is_zero", False):
+            raise InvalidArgumentError(
+                "the closed loop feeds no joint-friction model; valid: dynamics whose "
+                "joint_friction is identically zero, or estimator.include_joint_friction=False")
         cmd = (self._zeros6 if wrench_cmd_world is None
                else np.asarray(wrench_cmd_world, np.float64))
-        head = (chain, dyn.chain_work, bool(dyn.need_coriolis), *dyn.chain_state)
-        tail = (cmd, self.internal_model.mask_array(learn_mask), self._zeros7,
-                dynamics_arrays(dyn), *self._stage_buffers, *self.internal_model.kernel_args(),
-                *self._law_buffers)
-        return head, tail
+        return cmd, self.internal_model.mask_array(learn_mask)
 
     def finish_tick(self, flags: int, quat_target_world: np.ndarray,
                     learn_mask: np.ndarray | None = None) -> None:
-        """Second half of a fused tick: errors, scheduled learning, ``signals``."""
+        """After a ``controller_tick`` run by the closed loop: errors, scheduled learning,
+        ``signals``."""
         if flags:
             self._after_tick(flags, quat_target_world,
                              self.internal_model.mask_array(learn_mask))

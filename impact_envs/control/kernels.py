@@ -21,10 +21,11 @@ weights (float32, the weights shared with torch); its first dense layer accumula
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
+import numpy as np
 from numba import njit
 
-from impact_envs.control.chain_dynamics import chain_terms
 from impact_envs.control.kernel_layout import (
     BAD_INPUT,
     BAD_QUAT,
@@ -80,7 +81,7 @@ from impact_envs.control.kernel_stages import (
 __all__ = [
     "BAD_INPUT", "BAD_QUAT", "CONTROLLER_SIZE", "NON_FINITE", "SLOW_FILTER_SIZE", "STORE",
     "TRAIN",
-    "controller_tick", "controller_tick_chain", "controller_views", "first_bad_input",
+    "ControllerState", "controller_tick", "controller_views", "first_bad_input",
     "gate_update",
     "impedance_law", "impedance_size", "impedance_views", "limit_rate", "limiter_size",
     "limiter_views", "matrix_to_quat", "mlp_forward", "model32_size", "model32_views",
@@ -121,25 +122,48 @@ def first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, grippe
     return -1
 
 
+class ControllerState(NamedTuple):
+    """Every buffer ``controller_tick`` reads and writes, by stage (``ImpactController``
+    builds it; a named structure numba accepts, so no argument list of buffers).
+
+    ``ctl``: the controller's own buffer (``controller_views``); ``grams`` / ``wrench_maps``
+    (2, 6, 6) / (2, 6, 7): the estimator's and the null-space projector's solves (one when
+    shared); ``est``, ``sf``, ``imp``, ``lim``: estimator, slow filter, impedance and limiter
+    buffers; ``model32``, ``weights``, ``biases``, ``model``: the internal model's.
+    """
+
+    ctl: np.ndarray
+    grams: np.ndarray
+    wrench_maps: np.ndarray
+    est: np.ndarray
+    sf: np.ndarray
+    model32: np.ndarray
+    weights: tuple
+    biases: tuple
+    model: np.ndarray
+    imp: np.ndarray
+    lim: np.ndarray
+
+
 @njit(cache=True)
 def controller_tick(
-    q, dq, tau_meas, pos_target, quat_target, wrench_cmd, mask, gripper_width, fric, dyn,
-    ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, imp, lim,
+    q, dq, tau_meas, pos_target, quat_target, wrench_cmd, mask, gripper_width, fric, dyn, state,
 ) -> int:  # fmt: skip
     """Everything of ImpactController.compute after ``dynamics.update``; returns status bits.
 
-    ``ctl`` is the controller buffer (``controller_views``); grams / wrench_maps (2, 6, 6) /
-    (2, 6, 7) hold the estimator's and the null-space projector's solves (one when shared).
-    Without "run internal model" (mode "impedance") the model is skipped entirely.
+    ``dyn`` is a ``DynamicsArrays`` at (q, dq), ``state`` a ``ControllerState``. Without
+    "run internal model" (mode "impedance") the model is skipped entirely. Inputs out of range
+    return ``BAD_INPUT`` and a zero quaternion ``BAD_QUAT`` before anything is written.
     """
+    ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, imp, lim = state
     par, sig_cmd, w_extra, scalars, w_ff = controller_views(ctl)
     if first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, gripper_width) >= 0:
         return BAD_INPUT
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
-    regularized_wrench_map(dyn[0], par[0], grams[0], wrench_maps[0])
+    regularized_wrench_map(dyn.jacobian, par[0], grams[0], wrench_maps[0])
     if par[2] == 0.0:
-        regularized_wrench_map(dyn[0], par[1], grams[1], wrench_maps[1])
+        regularized_wrench_map(dyn.jacobian, par[1], grams[1], wrench_maps[1])
     if par[3] == 0.0:
         residual_update(dq, tau_meas, fric, dyn, wrench_maps[0], est)
     else:
@@ -149,7 +173,7 @@ def controller_tick(
     flags = 0
     pred = model_views(model)[3]
     if par[4] != 0.0:
-        push_features(q, dq, gripper_width, dyn[4], wrench_ext, model32, model)
+        push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
         model_predict(model32, weights, biases, model)
         flags = model_gate_step(slow_filter_views(sf)[4], slow_rate, mask, model)
     for i in range(6):
@@ -170,32 +194,6 @@ def controller_tick(
         if not math.isfinite(v):
             flags |= NON_FINITE
     return flags
-
-
-@njit(cache=True)
-def controller_tick_chain(
-    chain, chain_work, need_coriolis, q_model, dq_model,
-    q, dq, tau_meas, pos_target, quat_target, wrench_cmd, mask, gripper_width, fric, dyn,
-    ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, imp, lim,
-) -> int:  # fmt: skip
-    """``chain_terms`` (the model update, into ``dyn``) then ``controller_tick``: one call.
-
-    ``chain`` is ``ChainParams.arrays()``; ``q_model`` / ``dq_model`` receive copies of q, dq
-    (the state the model was evaluated at). Inputs out of range return ``BAD_INPUT`` before
-    the model is touched.
-    """
-    if first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, gripper_width) >= 0:
-        return BAD_INPUT
-    for i in range(q.shape[0]):
-        q_model[i] = q[i]
-        dq_model[i] = dq[i]
-    chain_terms(chain[0], chain[1], chain[2], chain[3], chain[4], chain[5], chain[6], chain[7],
-                chain[8], q_model, dq_model, need_coriolis, chain_work, dyn[4], dyn[5], dyn[0],
-                dyn[1], dyn[3], dyn[2])
-    return controller_tick(
-        q, dq, tau_meas, pos_target, quat_target, wrench_cmd, mask, gripper_width, fric, dyn,
-        ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, imp, lim,
-    )  # fmt: skip
 
 
 @njit(cache=True)

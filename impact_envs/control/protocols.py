@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Protocol, runtime_checkable
+from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -38,15 +38,22 @@ class ArmDynamics(Protocol):
         ...
 
 
-def dynamics_arrays(
-    dynamics: ArmDynamics,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The ``dyn`` tuple of the numba kernels: (J, M, C, g, p_ee, R_ee), float64 arrays.
+class DynamicsArrays(NamedTuple):
+    """The model quantities the numba kernels read, as one named structure (float64 arrays;
+    numba unpacks it by field name at no cost). C-contiguous arrays are expected
+    (``PinocchioArm`` provides them); another layout compiles one more specialization."""
 
-    C-contiguous arrays are expected (``PinocchioArm`` and ``ConstantArmDynamics`` provide
-    them); another layout or dtype works but compiles one more kernel specialization.
-    """
-    return (
+    jacobian: np.ndarray
+    mass_matrix: np.ndarray
+    coriolis_matrix: np.ndarray
+    gravity: np.ndarray
+    pos_ee_world: np.ndarray
+    rot_ee_world: np.ndarray
+
+
+def dynamics_arrays(dynamics: ArmDynamics) -> DynamicsArrays:
+    """``DynamicsArrays`` of a model (the arrays themselves: updates are seen in place)."""
+    return DynamicsArrays(
         dynamics.jacobian,
         dynamics.mass_matrix,
         dynamics.coriolis_matrix,

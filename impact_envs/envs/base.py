@@ -21,8 +21,8 @@ from impact_envs.control.internal_model import ModelSnapshot
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.control.presets import PRESETS, preset_config, preset_name
 from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_envs.loop import ClosedLoop, TickTargets
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
-from impact_envs.robot.loop import FusedTicks, control_tick
 from impact_envs.robot.sim import FrankaSim, SensorNoise
 from impact_envs.tasks.base import Task, refresh_constants
 
@@ -51,10 +51,6 @@ class ImpactEnv(gym.Env):
     """Shared machinery of the IMPACT environments; each task subclass documents itself."""
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": POLICY_HZ}
-    fused_loop: bool = True
-    """Run ticks through ``robot.loop.FusedTicks`` (one numba call for sensing, control and
-    actuation) when the task has no per-tick hook; False forces the reference path
-    (``control_tick``, the controller's public ``compute``). Both give identical numbers."""
 
     @classmethod
     def make_task(cls) -> Task:
@@ -106,6 +102,8 @@ class ImpactEnv(gym.Env):
                                                          controller_config)
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
         self.controller = ImpactController(self.dynamics, cfg, mode=controller)
+        self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
+                               task.before_tick if task.has_tick_hook else None)
         self._warm: ModelSnapshot | None = None
         self._camera = camera
         self._size = (int(height), int(width))
@@ -220,60 +218,23 @@ class ImpactEnv(gym.Env):
         """Run the 33/34 control ticks of one policy step; return the step's metrics.
 
         The targets of all ticks are interpolated up front (one vectorized lerp / slerp), and
-        the sensor-noise draws of all ticks come from one ``np_random`` call (the same numbers
-        as one call per tick: nothing else draws from ``np_random`` during the ticks); energy
-        and peak torque are reduced once per step from per-tick rows; contact forces are
-        sampled every 4th tick and on the last one.
+        the sensor-noise draws of all ticks come from one ``np_random`` call (nothing else
+        draws from ``np_random`` during the ticks); energy and peak torque are reduced once per
+        step from per-tick rows (``ClosedLoop.run``).
         """
-        sim, ctrl, rng, task = self.sim, self.controller, self.np_random, self.task
-        data = sim.data
         n = ticks_for_step(self._step_count)
         alphas = np.arange(1, n + 1) / n
-        positions = pos0 + alphas[:, None] * (pos1 - pos0)
-        quats = slerp(quat0, quat1, alphas)
-        noise = rng.standard_normal((n, 21))
-        taus, qvels = np.empty((n, 7)), np.empty((n, 7))
-        arm_dof = sim.arm_dof  # a slice in every scene: then a view that MuJoCo updates
-        qvel_arm = data.qvel[arm_dof] if isinstance(arm_dof, slice) else None
-        peak_robot = peak_obj = 0.0
-        fused = self._fused_ticks(noise, positions, quats, taus, qvels, gripper, wrench_cmd,
-                                  learn_mask)
-        for i in range(1, n + 1):
-            if fused is not None:
-                fused.tick(i - 1)  # also records taus / qvels
-            else:
-                task.before_tick(sim, float(data.time))
-                q, dq = control_tick(sim, ctrl, rng, positions[i - 1], quats[i - 1], gripper,
-                                     wrench_cmd, learn_mask, noise[i - 1])
-                taus[i - 1] = sim.tau_applied
-                qvels[i - 1] = qvel_arm if qvel_arm is not None else data.qvel[arm_dof]
-            if i % 4 == 0 or i == n:
-                f_robot, f_obj = sim.contact_forces()
-                peak_robot = max(peak_robot, f_robot)
-                peak_obj = max(peak_obj, f_obj)
-        sim.check_finite()
-        if fused is not None:
-            fused.finish()
-            q, dq = fused.sensed[:7].copy(), fused.sensed[7:14].copy()
-        self._q_meas, self._dq_meas = q, dq
-        power = np.abs(np.einsum("ij,ij->i", taus, qvels))  # |tau . qdot| per tick [W]
-        return {"energy_j": float(np.sum(power * sim.dt)),
-                "peak_torque_nm": float(np.abs(taus).max()),
-                "peak_robot_contact_force_n": peak_robot, "peak_object_contact_force_n": peak_obj}
-
-    def _fused_ticks(self, noise: np.ndarray, positions: np.ndarray, quats: np.ndarray,
-                     taus: np.ndarray, qvels: np.ndarray, gripper: float,
-                     wrench_cmd: np.ndarray | None,
-                     learn_mask: np.ndarray | None) -> FusedTicks | None:
-        """The one-numba-call-per-tick path, when nothing needs Python between the stages:
-        the task has no per-tick hook, and sim and controller support it (else None)."""
-        if not self.fused_loop or type(self.task).before_tick is not Task.before_tick:
-            return None
-        inputs = self.controller.fused_inputs(wrench_cmd, learn_mask)
-        if inputs is None or self.sim.fused_args() is None:
-            return None
-        return FusedTicks(self.sim, self.controller, inputs, noise, positions, quats, taus,
-                          qvels, gripper, learn_mask)
+        targets = TickTargets(pos0 + alphas[:, None] * (pos1 - pos0),
+                              slerp(quat0, quat1, alphas),
+                              self.np_random.standard_normal((n, 21)), gripper, wrench_cmd,
+                              learn_mask)
+        trace = self.loop.run(targets)
+        self._q_meas, self._dq_meas = trace.q, trace.dq
+        power = np.abs(np.einsum("ij,ij->i", trace.taus, trace.qvels))  # |tau . qdot| [W]
+        return {"energy_j": float(np.sum(power * self.sim.dt)),
+                "peak_torque_nm": float(np.abs(trace.taus).max()),
+                "peak_robot_contact_force_n": trace.peak_robot_contact_n,
+                "peak_object_contact_force_n": trace.peak_object_contact_n}
 
     # ------------------------------------------------------------- observation
     def _observation(self) -> dict[str, np.ndarray]:

@@ -13,8 +13,13 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from impact_envs.control.chain_dynamics import ChainParams, chain_terms, make_workspace
 from impact_envs.errors import InvalidArgumentError
+from impact_envs.robot.chain_dynamics import (
+    ChainParams,
+    ModelArrays,
+    chain_terms,
+    make_workspace,
+)
 
 ROBOT_XML = Path(__file__).resolve().parent.parent / "assets" / "fr3_hand.xml"
 """The robot-only MJCF (one root body at the identity pose)."""
@@ -111,11 +116,14 @@ class PinocchioArm:
         self.gravity = np.zeros(7)
         self.coriolis_matrix = np.zeros((7, 7))
         self.need_coriolis = True
-        self._q, self._dq = np.zeros(7), np.zeros(7)
+        self.q_model, self.dq_model = np.zeros(7), np.zeros(7)  # where the model was evaluated
         self._nle_data = self.model.createData()
-        self.chain_params = ChainParams.from_pinocchio(self.model, self._tcp).arrays()
+        self.chain = ChainParams.from_pinocchio(self.model, self._tcp)
+        """``ChainParams`` of ``chain_terms`` (the closed loop calls it inside its tick)."""
         self.chain_work = make_workspace(self.n)
-        self.chain_state = (self._q, self._dq)
+        self.model_arrays = ModelArrays(self.pos_ee_world, self.rot_ee_world, self.jacobian,
+                                        self.mass_matrix, self.gravity, self.coriolis_matrix)
+        """The cached attributes as ``chain_terms`` writes them (the same arrays)."""
         self.joint_friction_is_zero = True  # see joint_friction: the sensor is link-side
 
     def update(self, q: np.ndarray, dq: np.ndarray) -> None:
@@ -127,16 +135,15 @@ class PinocchioArm:
         needs it every tick). Its factorization differs from ``pin.computeCoriolisMatrix``'s
         (C is not unique) but C dq and C^T dq, the only products the controller forms, agree.
         """
-        self._q[:] = q
-        self._dq[:] = dq
-        chain_terms(*self.chain_params, self._q, self._dq, self.need_coriolis, self.chain_work,
-                  self.pos_ee_world, self.rot_ee_world, self.jacobian, self.mass_matrix,
-                  self.gravity, self.coriolis_matrix)
+        self.q_model[:] = q
+        self.dq_model[:] = dq
+        chain_terms(self.chain, self.q_model, self.dq_model, self.need_coriolis, self.chain_work,
+                    self.model_arrays)
 
     @property
     def nonlinear(self) -> np.ndarray:
         """C(q, dq) dq + g(q) [Nm] at the last ``update`` (RNEA on demand, a new array)."""
-        return pin.nonLinearEffects(self.model, self._nle_data, self._q, self._dq).copy()
+        return pin.nonLinearEffects(self.model, self._nle_data, self.q_model, self.dq_model).copy()
 
     def joint_friction(self, dq: np.ndarray) -> np.ndarray:
         """Joint friction torque [Nm] that the torque sensor does NOT see, for the residual.

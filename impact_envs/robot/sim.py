@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -29,6 +30,33 @@ from impact_envs.robot.sim_kernels import (
 )
 
 ASSETS = Path(__file__).resolve().parent.parent / "assets"
+
+
+class SimArrays(NamedTuple):
+    """What the closed loop's per-tick kernel reads and writes in the simulator.
+
+    ``noise_stds`` = [q, dq, tau] sensor noise [rad, rad/s, Nm]; the arm's ``qpos``,
+    ``qvel``, ``qfrc_actuator`` and ``qfrc_damper`` as views of ``MjData``; ``tau_bias`` the
+    episode's torque-sensor bias [Nm]; ``qpos`` all of it (fingers at ``finger_i``/``_j``);
+    ``torque_limits`` the hardware limits [Nm]; ``tau_applied`` the last torque sent [Nm];
+    ``ctrl`` MuJoCo's controls, with the arm's actuators at ``arm_act`` and the gripper's at
+    ``gripper_act``.
+    """
+
+    noise_stds: np.ndarray
+    qpos_arm: np.ndarray
+    qvel_arm: np.ndarray
+    qfrc_actuator_arm: np.ndarray
+    qfrc_damper_arm: np.ndarray
+    tau_bias: np.ndarray
+    qpos: np.ndarray
+    finger_i: int
+    finger_j: int
+    torque_limits: np.ndarray
+    tau_applied: np.ndarray
+    ctrl: np.ndarray
+    arm_act: np.ndarray
+    gripper_act: int
 
 
 
@@ -204,17 +232,23 @@ class FrankaSim:
                out)
         return out[:7], out[7:14], out[14:]
 
-    def fused_args(self) -> tuple | None:
-        """Sensing and actuation arrays for ``loop.fused_tick`` (valid until the next reset):
-        ``(stds, qpos, qvel, qfrc_actuator, qfrc_damper, tau_bias, full qpos, finger qpos ids,
-        torque_limits, tau_applied, ctrl, arm actuator ids, gripper actuator id)``;
-        ``None`` when the arm's state is not contiguous in MuJoCo's arrays."""
+    def loop_arrays(self) -> SimArrays:
+        """Sensing and actuation arrays of the closed loop's tick (views of ``MjData``, valid
+        until ``data`` is replaced).
+
+        Raises:
+            InvalidArgumentError: The arm's joints are not contiguous in MuJoCo's arrays
+                (the per-tick kernel reads them as views).
+        """
         if not (isinstance(self.arm_qpos, slice) and isinstance(self.arm_dof, slice)):
-            return None
-        views = self._arm_views()
-        i, j = self._finger_ids
-        return (self._noise_stds, *views, self._tau_bias, self._qpos, i, j, self.torque_limits,
-                self.tau_applied, self._ctrl, self.arm_act, int(self.gripper_act))
+            raise InvalidArgumentError(
+                "the arm's qpos/qvel are not contiguous in this scene; valid: the seven arm "
+                "joints declared one after another (as in assets/fr3_hand.xml)")
+        qpos_arm, qvel_arm, qfrc_actuator, qfrc_damper = self._arm_views()
+        finger_i, finger_j = self._finger_ids
+        return SimArrays(self._noise_stds, qpos_arm, qvel_arm, qfrc_actuator, qfrc_damper,
+                         self._tau_bias, self._qpos, finger_i, finger_j, self.torque_limits,
+                         self.tau_applied, self._ctrl, self.arm_act, int(self.gripper_act))
 
     def true_joint_torque(self) -> np.ndarray:
         """Noise-free link-side joint torque of the last step [Nm] (a new array).

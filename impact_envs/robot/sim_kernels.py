@@ -1,7 +1,7 @@
 """Numba kernels of ``FrankaSim`` (sensing, actuation, state and contact checks).
 
 Compiled once and cached (``impact_envs.jit_cache`` keeps the cache in step); ``FrankaSim``
-and the fused tick loop (``robot/loop.py``) call them on views of ``MjData``.
+and the closed loop's tick (``impact_envs/loop``) call them on views of ``MjData``.
 """
 
 from __future__ import annotations
@@ -9,8 +9,6 @@ from __future__ import annotations
 import math
 
 from numba import njit
-
-from impact_envs.control.kernels import saturate
 
 GROUP_OTHER, GROUP_ROBOT, GROUP_OBJECT = 0, 1, 2
 """Contact classes of a geom (``FrankaSim`` classifies every geom once)."""
@@ -37,10 +35,19 @@ def sense(z, stds, qpos, qvel, qfrc_actuator, qfrc_damper, friction, bias, out) 
 
 @njit(cache=True)
 def actuate(tau, torque_limits, tau_applied, ctrl, arm_act, gripper_act, gripper_cmd) -> None:
-    """tau_applied = clip(tau, +-limits) -> ctrl[arm_act]; ctrl[gripper] from cmd in [-1, 1]."""
-    saturate(tau, torque_limits, tau_applied)
+    """tau_applied = clip(tau, +-limits) -> ctrl[arm_act]; ctrl[gripper] from cmd in [-1, 1].
+
+    The drives enforce their own torque limits, whatever the controller sent (NaN passes to
+    MuJoCo, whose state check then fails: nothing hides a non-finite command).
+    """
     for j in range(arm_act.shape[0]):
-        ctrl[arm_act[j]] = tau_applied[j]
+        v = tau[j]
+        if v > torque_limits[j]:
+            v = torque_limits[j]
+        if v < -torque_limits[j]:
+            v = -torque_limits[j]
+        tau_applied[j] = v
+        ctrl[arm_act[j]] = v
     g = gripper_cmd
     if g > 1.0:
         g = 1.0

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numbers
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from typing import ClassVar
 
 import mujoco
 import numpy as np
@@ -107,6 +108,16 @@ class Task(ABC):
     max_episode_steps: int
     workspace_low: np.ndarray
     workspace_high: np.ndarray
+    has_tick_hook: ClassVar[bool] = False
+    """Declared capability: True when the task overrides ``before_tick`` (the closed loop then
+    calls it before every 1 kHz tick). Checked when the subclass is defined."""
+
+    def __init_subclass__(cls, **kwargs: object) -> None:
+        super().__init_subclass__(**kwargs)
+        overrides = cls.before_tick is not Task.before_tick
+        if overrides != cls.has_tick_hook:
+            raise TypeError(f"{cls.__name__}: set has_tick_hook = {overrides} (it "
+                            f"{'overrides' if overrides else 'does not override'} before_tick)")
 
     @property
     def param_name(self) -> str:
@@ -147,7 +158,8 @@ class Task(ABC):
         how it meets a load's sag (``policies.scripted.COMPENSATIONS``)."""
 
     def before_tick(self, sim: FrankaSim, time_s: float) -> None:  # noqa: B027
-        """Hook run before every physics tick (e.g. external disturbances). Default: nothing."""
+        """Hook run before every 1 kHz tick (e.g. external disturbances) when the task
+        declares ``has_tick_hook = True``. Default: nothing."""
 
     def control_inputs(
         self, sim: FrankaSim, action: np.ndarray

@@ -74,6 +74,8 @@ SAMPLE_TICKS = 10
 class CalligraphyTask(Task):
     """Write one randomly chosen, placed and rotated character with a hand-held pen."""
 
+    has_tick_hook = True
+
     name = "calligraphy"
     scene_xml = "calligraphy_scene.xml"
     object_bodies = ("pen",)

@@ -90,6 +90,8 @@ class DisturbanceProfile:
 class DisturbanceTask(Task):
     """Pick the trough, carry it to the goal point and hold it under disturbances."""
 
+    has_tick_hook = True
+
     name = "disturbance"
     scene_xml = "disturbance_scene.xml"
     object_bodies = ("trough",)

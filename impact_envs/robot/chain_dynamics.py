@@ -3,8 +3,8 @@
 The arm model runs at 1 kHz inside the control loop. Five Pinocchio calls cost about 10 us
 per tick, mostly binding overhead and array copies; ``chain_terms`` computes the same
 quantities (TCP pose, world-aligned TCP Jacobian, M(q) with armature, g(q), and a Coriolis
-matrix with M' = C + C^T) in about 3 us, and the controller fuses it into its own kernel call.
-The parameters are read once from a (possibly perturbed) ``pin.Model``
+matrix with M' = C + C^T) in about 3 us, and the closed loop (``impact_envs/loop``) runs it
+inside its one call per tick. The parameters are read once from a (possibly perturbed) ``pin.Model``
 (``ChainParams.from_pinocchio``), so Pinocchio stays the single source of the controller's
 model; tests/test_chain_dynamics.py checks every output against Pinocchio.
 
@@ -19,8 +19,7 @@ I_i' = [w_i]x I_i - I_i [w_i]x; C q' is the Coriolis/centrifugal torque.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -28,9 +27,20 @@ from numba import njit
 from impact_envs.errors import InvalidArgumentError
 
 
-@dataclass(frozen=True)
-class ChainParams:
-    """Constant model parameters of an n-joint revolute-z chain (joint frames, parent first).
+class ModelArrays(NamedTuple):
+    """Outputs of ``chain_terms``, written in place (``PinocchioArm``'s cached attributes)."""
+
+    pos_ee_world: np.ndarray
+    rot_ee_world: np.ndarray
+    jacobian: np.ndarray
+    mass_matrix: np.ndarray
+    gravity: np.ndarray
+    coriolis_matrix: np.ndarray
+
+
+class ChainParams(NamedTuple):
+    """Constant model parameters of an n-joint revolute-z chain (joint frames, parent first);
+    a named tuple of arrays, which is what ``chain_terms`` reads.
 
     Attributes:
         rot_joint_parent: (n, 3, 3) rotation of joint i's frame in its parent's at q = 0.
@@ -79,12 +89,6 @@ class ChainParams:
             pos_tcp_last=np.array(frame.placement.translation, f64),
             gravity_world=np.array(model.gravity.linear, f64),
         )
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        """The parameters in the order ``chain_terms`` takes them."""
-        return (self.rot_joint_parent, self.pos_joint_parent, self.mass, self.com_joint,
-                self.inertia_com_joint, self.armature, self.rot_tcp_last, self.pos_tcp_last,
-                self.gravity_world)
 
 
 def make_workspace(n: int) -> np.ndarray:
@@ -204,14 +208,14 @@ def _add_products(out, cols, m, jv, lin, work, rot) -> None:
 
 
 @njit(cache=True)
-def chain_terms(
-    rot_jp, pos_jp, mass, com_j, inertia_j, armature, rot_tcp, pos_tcp, gravity,
-    q, dq, need_coriolis, work, pos_ee, rot_ee, jac, mass_matrix, grav, coriolis,
-) -> None:  # fmt: skip
+def chain_terms(chain, q, dq, need_coriolis, work, out) -> None:
     """Fill TCP pose, world-aligned TCP Jacobian (linear rows first), M, g and (optionally) C.
 
-    ``work`` comes from ``make_workspace``. All outputs are written in place.
+    ``chain`` is a ``ChainParams``, ``work`` comes from ``make_workspace``, ``out`` is a
+    ``ModelArrays`` (all written in place).
     """
+    rot_jp, pos_jp, mass, com_j, inertia_j, armature, rot_tcp, pos_tcp, gravity = chain
+    pos_ee, rot_ee, jac, mass_matrix, grav, coriolis = out
     n = q.shape[0]
     _forward(rot_jp, pos_jp, com_j, inertia_j, q, dq, work)
     _tcp_terms(work, rot_tcp, pos_tcp, pos_ee, rot_ee, jac)

@@ -1,0 +1,141 @@
+"""The closed loop over robot/ and control/: sense -> control -> actuate -> step, at 1 kHz.
+
+One path for every task: ``ClosedLoop.run`` runs the ticks of one policy step, each one numba
+call (``tick.loop_tick``) followed by ``mj_step``; a task that declares a per-tick hook
+(``Task.has_tick_hook``) gets it called before each tick. ``control_tick`` is the same tick
+through the controller's public ``compute`` (what a real FR3 would run); tests/test_loop.py
+checks that both give identical trajectories.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from impact_envs.control.controller import ImpactController, describe_bad_input
+from impact_envs.control.kernels import BAD_INPUT
+from impact_envs.control.protocols import dynamics_arrays
+from impact_envs.errors import SimulationError
+from impact_envs.loop.tick import ArmArrays, StepPlan, loop_tick
+from impact_envs.robot.dynamics import PinocchioArm
+from impact_envs.robot.sim import FrankaSim
+
+CONTACT_EVERY = 4
+"""Contact forces are sampled every 4th tick and on a step's last one."""
+
+
+class StepTrace(NamedTuple):
+    """What one policy step's ticks leave: per-tick ``taus`` (n, 7) [Nm] and ``qvels`` (n, 7)
+    [rad/s], the last sensed ``q`` [rad] and ``dq`` [rad/s], and the peak contact forces [N]
+    on the robot and on the objects (``FrankaSim.contact_forces``)."""
+
+    taus: np.ndarray
+    qvels: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    peak_robot_contact_n: float
+    peak_object_contact_n: float
+
+
+class TickTargets(NamedTuple):
+    """The inputs of one policy step: per-tick TCP targets ``positions`` (n, 3) [m] and
+    ``quats`` (n, 4), sensor draws ``noise`` (n, 21), ``gripper_cmd`` in [-1, 1], and the
+    task's ``wrench_cmd`` (6,) [N, Nm] and ``learn_mask`` (6 bools) or None."""
+
+    positions: np.ndarray
+    quats: np.ndarray
+    noise: np.ndarray
+    gripper_cmd: float
+    wrench_cmd: np.ndarray | None
+    learn_mask: np.ndarray | None
+
+
+class ClosedLoop:
+    """Runs policy steps of 1 kHz ticks for one simulator, arm model and controller.
+
+    Args:
+        sim: The simulator (its arm joints contiguous in MuJoCo's arrays).
+        dynamics: The controller's arm model (its ``chain_terms`` arrays).
+        controller: The controller; ``reset`` it before ``run``.
+        tick_hook: Called as ``tick_hook(sim, time_s)`` before every tick, or None.
+    """
+
+    def __init__(self, sim: FrankaSim, dynamics: PinocchioArm, controller: ImpactController,
+                 tick_hook: Callable[[FrankaSim, float], None] | None = None) -> None:
+        self.sim, self.controller, self.tick_hook = sim, controller, tick_hook
+        self.arm = ArmArrays(dynamics.chain, dynamics.chain_work, bool(dynamics.need_coriolis),
+                             dynamics.q_model, dynamics.dq_model, dynamics.model_arrays)
+        self._dyn = dynamics_arrays(dynamics)
+        self._fric_model = np.zeros(7)
+        self._tick: Callable[..., int] | None = None
+
+    def _entry(self, args: tuple) -> Callable[..., int]:
+        """``loop_tick`` compiled for these argument types, resolved on the first step:
+        calling it skips numba's per-call type dispatch (about 0.1 us per array in a named
+        tuple, some 60 arrays here). Every array the loop passes is built here or by the
+        simulator and controller with fixed dtypes and dimensions, so the types never change."""
+        if self._tick is None:
+            self._tick = loop_tick.compile(tuple(numba.typeof(a) for a in args))
+        return self._tick
+
+    def run(self, targets: TickTargets) -> StepTrace:
+        """The ticks of one policy step (one per row of ``targets.positions``)."""
+        sim, ctrl = self.sim, self.controller
+        n = targets.positions.shape[0]
+        cmd, mask = ctrl.loop_inputs(targets.wrench_cmd, targets.learn_mask)
+        plan = StepPlan(targets.noise, targets.positions, targets.quats, np.empty((n, 7)),
+                        np.empty((n, 7)), np.empty(21), float(targets.gripper_cmd), cmd, mask,
+                        self._fric_model)
+        sim_arrays, state = sim.loop_arrays(), ctrl.kernel_state()
+        tick = self._entry((0, sim.friction_torque(), plan, sim_arrays, self.arm, self._dyn,
+                            state))
+        peak_robot = peak_obj = 0.0
+        hook, data = self.tick_hook, sim.data
+        for i in range(n):
+            if hook is not None:
+                hook(sim, float(data.time))
+            flags = tick(i, sim.friction_torque(), plan, sim_arrays, self.arm, self._dyn, state)
+            if flags:
+                self._raise_or_learn(i, flags, plan, targets.learn_mask)
+            sim.step()
+            if (i + 1) % CONTACT_EVERY == 0 or i == n - 1:
+                f_robot, f_obj = sim.contact_forces()
+                peak_robot, peak_obj = max(peak_robot, f_robot), max(peak_obj, f_obj)
+        sim.check_finite()
+        plan.qvels[-1] = sim_arrays.qvel_arm
+        ctrl.finish_tick(0, plan.quat_targets[-1], targets.learn_mask)
+        q, dq = plan.sensed[:7].copy(), plan.sensed[7:14].copy()
+        return StepTrace(plan.taus, plan.qvels, q, dq, peak_robot, peak_obj)
+
+    def _raise_or_learn(self, i: int, flags: int, plan: StepPlan,
+                        learn_mask: np.ndarray | None) -> None:
+        """After tick ``i``: raise on a refused tick, else run the scheduled learning."""
+        if flags & BAD_INPUT:  # the action was validated on entry: the sensed state is off
+            s = plan.sensed
+            raise SimulationError(
+                f"controller input out of range at tick {i}: " + describe_bad_input(
+                    s[:7], s[7:14], s[14:], plan.pos_targets[i], plan.quat_targets[i],
+                    plan.wrench_cmd, self.sim.gripper_width()))
+        self.controller.finish_tick(flags, plan.quat_targets[i], learn_mask)
+
+
+def control_tick(
+    sim: FrankaSim,
+    controller: ImpactController,
+    rng: np.random.Generator,
+    pos_target_world: np.ndarray,
+    quat_target_world: np.ndarray,
+    gripper_cmd: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One tick through the controller's public ``compute`` (no commanded wrench, learning on
+    every axis); returns the sensed ``(q, dq)`` it used. Draws the 21 sensor-noise numbers
+    from ``rng``."""
+    q, dq, tau_meas = sim.read_sensors(rng)
+    tau = controller.compute(q, dq, tau_meas, pos_target_world, quat_target_world,
+                             gripper_width_m=sim.gripper_width())
+    sim.apply(tau, gripper_cmd)
+    sim.step()
+    return q, dq

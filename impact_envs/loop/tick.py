@@ -1,0 +1,100 @@
+"""One 1 kHz tick as one numba call: sense -> model update -> controller -> actuate.
+
+The data crosses as named structures built once per policy step: ``StepPlan`` (this step's
+targets, noise draws and records), ``SimArrays`` (the simulator's views, ``robot/sim.py``),
+``ArmArrays`` (the arm model, ``robot/chain_dynamics.py``), ``DynamicsArrays`` and
+``ControllerState`` (the controller's, ``control/``). The physics step (``mj_step``) follows
+in Python (``closed_loop.py``).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from impact_envs.control.kernels import (
+    BAD_INPUT,
+    BAD_QUAT,
+    NON_FINITE,
+    controller_tick,
+    first_bad_input,
+    limiter_views,
+)
+from impact_envs.robot.chain_dynamics import chain_terms
+from impact_envs.robot.sim_kernels import actuate, sense
+
+
+class StepPlan(NamedTuple):
+    """The ticks of one policy step: inputs (one row per tick) and records.
+
+    ``noise`` (n, 21) standard-normal sensor draws; ``pos_targets`` (n, 3) [m] and
+    ``quat_targets`` (n, 4) TCP targets; ``taus`` (n, 7) output: applied torques [Nm];
+    ``qvels`` (n, 7) output: arm velocities after each tick [rad/s] (the last row is filled by
+    ``ClosedLoop``); ``sensed`` (21,) output: the last readings [q, dq, tau];
+    ``gripper_cmd`` in [-1, 1]; ``wrench_cmd`` (6,) [N, Nm] and ``mask`` (6,) float32 as
+    ``ImpactController.loop_inputs`` gives them; ``fric_model`` (7,) zeros (the loop feeds no
+    joint-friction model).
+    """
+
+    noise: np.ndarray
+    pos_targets: np.ndarray
+    quat_targets: np.ndarray
+    taus: np.ndarray
+    qvels: np.ndarray
+    sensed: np.ndarray
+    gripper_cmd: float
+    wrench_cmd: np.ndarray
+    mask: np.ndarray
+    fric_model: np.ndarray
+
+
+class ArmArrays(NamedTuple):
+    """The arm model as ``chain_terms`` reads and writes it (``PinocchioArm``'s arrays):
+    ``q_model``/``dq_model`` receive the readings the model is evaluated at, ``out`` its
+    ``ModelArrays``."""
+
+    chain: tuple
+    work: np.ndarray
+    need_coriolis: bool
+    q_model: np.ndarray
+    dq_model: np.ndarray
+    out: tuple
+
+
+@njit(cache=True)
+def loop_tick(i, friction, plan, sim, arm, dyn, state) -> int:
+    """Tick ``i``: read the sensors (noise row ``i``), update the arm model, run the
+    controller, send the torques; returns the controller's status bits.
+
+    ``friction`` is the arm's dof-friction force of the last physics step [Nm]. Nothing is
+    actuated when the bits report an input out of range, an invalid target or a non-finite
+    torque (``ClosedLoop`` then raises). Also records the applied torque in ``taus[i]`` and the
+    velocity the previous step produced in ``qvels[i - 1]``.
+    """
+    n = sim.qpos_arm.shape[0]
+    if i > 0:
+        for j in range(n):
+            plan.qvels[i - 1, j] = sim.qvel_arm[j]
+    sensed = plan.sensed
+    sense(plan.noise[i], sim.noise_stds, sim.qpos_arm, sim.qvel_arm, sim.qfrc_actuator_arm,
+          sim.qfrc_damper_arm, friction, sim.tau_bias, sensed)
+    q, dq, tau = sensed[:n], sensed[n:2 * n], sensed[2 * n:]
+    width = sim.qpos[sim.finger_i] + sim.qpos[sim.finger_j]
+    pos_target, quat_target = plan.pos_targets[i], plan.quat_targets[i]
+    if first_bad_input(q, dq, tau, pos_target, quat_target, plan.wrench_cmd, width) >= 0:
+        flags = BAD_INPUT
+    else:
+        for j in range(n):
+            arm.q_model[j] = q[j]
+            arm.dq_model[j] = dq[j]
+        chain_terms(arm.chain, arm.q_model, arm.dq_model, arm.need_coriolis, arm.work, arm.out)
+        flags = controller_tick(q, dq, tau, pos_target, quat_target, plan.wrench_cmd, plan.mask,
+                                width, plan.fric_model, dyn, state)
+    if not flags & (BAD_INPUT | BAD_QUAT | NON_FINITE):
+        actuate(limiter_views(state.lim)[3], sim.torque_limits, sim.tau_applied, sim.ctrl,
+                sim.arm_act, sim.gripper_act, plan.gripper_cmd)
+    for j in range(n):
+        plan.taus[i, j] = sim.tau_applied[j]
+    return flags
