@@ -34,6 +34,13 @@ KERNEL_SOURCES = (
 )
 """Every module (relative to the package) that defines ``@njit`` functions; located without
 importing anything (tests/test_jit_cache.py checks that the list is complete)."""
+TYPE_SOURCES = (
+    "control/arm_model.py",
+    "robot/sim.py",
+)
+"""Modules defining named tuples that kernels take as arguments (besides ``KERNEL_SOURCES``):
+a cached kernel refers to such a type by its module, so moving or changing one must
+invalidate the cache too (their digest counts; they hold no cached functions)."""
 
 STAMP_NAME = "impact_kernels.sha256"
 """File written into each cache directory: the digest its cached kernels were built from."""
@@ -90,6 +97,8 @@ def refresh_cache(sources: list[Path], digest: str) -> int:
 
 
 def ensure_fresh_kernel_cache() -> int:
-    """``refresh_cache`` for IMPACT's own kernel modules (called on ``import impact_envs``)."""
+    """``refresh_cache`` for IMPACT's own kernel modules (called on ``import impact_envs``);
+    the digest covers the kernel sources and ``TYPE_SOURCES``."""
     sources = kernel_sources()
-    return refresh_cache(sources, sources_digest(sources))
+    digest = sources_digest([*sources, *(PACKAGE_DIR / rel for rel in TYPE_SOURCES)])
+    return refresh_cache(sources, digest)

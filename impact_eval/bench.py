@@ -31,7 +31,7 @@ import numpy as np
 import impact_envs
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError
-from impact_envs.policies.protocol import stack_obs
+from impact_envs.policies.interface import stack_obs
 from impact_envs.policies.scripted import make_expert
 
 

@@ -31,7 +31,7 @@ import numpy as np
 
 from impact_envs.control.presets import PRESETS
 from impact_envs.errors import CheckpointError, InvalidArgumentError, check_choice
-from impact_envs.policies.protocol import Policy
+from impact_envs.policies.interface import Policy
 
 CONTROLLERS: tuple[str, ...] = ("impedance", "impact")
 """Values of the env's ``controller`` kwarg."""

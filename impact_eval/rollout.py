@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from impact_envs.errors import SimulationError
-from impact_envs.policies.protocol import Policy, stack_obs
+from impact_envs.policies.interface import Policy, stack_obs
 from impact_eval.metrics import EpisodeTracker
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from tqdm import tqdm
 
 from impact_envs.errors import ImpactError
-from impact_envs.policies.protocol import Policy
+from impact_envs.policies.interface import Policy
 from impact_eval.grid import episode_seed, format_value
 from impact_eval.methods import MethodSpec
 from impact_eval.rollout import EpisodeJob, LockstepBatch

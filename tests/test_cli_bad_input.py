@@ -14,10 +14,11 @@ import zarr
 from test_diffusion_e2e import _collect
 from test_eval_cli import _corrupt_checkpoint, sweep_args
 
-from impact_envs.policies.diffusion import collect as collect_module
-from impact_envs.policies.diffusion import train as train_module
-from impact_eval import bench, cli, protocol
+from impact_eval import bench, cli
+from impact_eval.experiments import adaptation
 from impact_eval.methods import CHECKPOINTS_ENV_VAR
+from impact_learn import collect as collect_module
+from impact_learn import train as train_module
 
 HAMMER = ("--env", "IMPACT/Hammer-v0")
 
@@ -144,7 +145,7 @@ def _command(name: str, tmp: Path, changes: tuple[str, ...]) -> tuple[Callable, 
         "protocol": ["--out", str(tmp / "out")],
     }[name]
     main = {"eval": cli.main, "collect": collect_module.main, "train": train_module.main,
-            "bench": bench.main, "protocol": protocol.main}[name]
+            "bench": bench.main, "protocol": adaptation.main}[name]
     return main, _with(base, changes), {"eval": "impact-eval"}.get(name, f"impact-{name}")
 
 

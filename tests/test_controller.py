@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import torch
+from fake_dynamics import ConstantArmDynamics
 
 from impact_envs.control.config import (
     ControllerConfig,
@@ -14,7 +15,6 @@ from impact_envs.control.config import (
     LimitsConfig,
 )
 from impact_envs.control.controller import ImpactController
-from impact_envs.control.fake_dynamics import ConstantArmDynamics
 from impact_envs.control.internal_model import OUTPUT_SCALE
 from impact_envs.control.lie import matrix_to_quat
 from impact_envs.control.presets import preset_config

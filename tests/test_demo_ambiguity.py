@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.policies.diffusion.dataset import EpisodeMeta, ReplayWriter
-from impact_eval.demo_ambiguity import OBS_KEYS, main
+from impact_eval.experiments.demo_ambiguity import OBS_KEYS, main
+from impact_learn.dataset import EpisodeMeta, ReplayWriter
 
 DIMS = {"ee_pos": 3, "ee_rot6d": 6, "gripper_width": 1, "object_pos": 3, "object_rot6d": 6,
         "goal_pos": 3}

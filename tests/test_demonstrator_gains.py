@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from impact_eval.demonstrator_gains import main
+from impact_eval.experiments.demonstrator_gains import main
 
 
 def test_shipped_gains_carry_a_2kg_hammer_near_the_nominal_height(capsys):

@@ -14,15 +14,15 @@ import pytest
 import torch
 
 from impact_envs.errors import InvalidArgumentError
-from impact_envs.policies.diffusion import collect as collect_module
-from impact_envs.policies.diffusion.bench import random_policy
-from impact_envs.policies.diffusion.collect import collect
-from impact_envs.policies.diffusion.collect_config import CollectConfig, parse_param_spec
 from impact_envs.policies.diffusion.config import DiffusionConfig
-from impact_envs.policies.diffusion.dataset import load_replay
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
-from impact_envs.policies.diffusion.train import RunOptions, train
-from impact_envs.policies.protocol import stack_obs
+from impact_envs.policies.interface import stack_obs
+from impact_eval.experiments.dp_inference_cost import random_policy
+from impact_learn import collect as collect_module
+from impact_learn.collect import collect
+from impact_learn.collect_config import CollectConfig, parse_param_spec
+from impact_learn.dataset import load_replay
+from impact_learn.train import RunOptions, train
 
 torch.set_num_threads(1)
 FAKE_ID = "TestDP/Reach-v0"
@@ -206,7 +206,7 @@ def test_collect_train_rollout(tmp_path):
 
 def test_non_finite_loss_stops_before_the_weights_change(tmp_path, monkeypatch):
     from impact_envs.errors import TrainingError
-    from impact_envs.policies.diffusion import train as train_module
+    from impact_learn import train as train_module
 
     _collect(tmp_path / "d.zarr", param=0.2)
     real_loss, calls = train_module.diffusion_loss, []
@@ -275,7 +275,7 @@ def test_real_hammer_pipeline(tmp_path):
 
 def test_env_factory_sets_the_envs_own_parameter(tmp_path):
     """--mass sets whatever the env sweeps (Calligraphy: tool_mass, not object_mass)."""
-    from impact_envs.policies.diffusion.collect import default_env_factory
+    from impact_learn.collect import default_env_factory
 
     cfg = CollectConfig(env_id="IMPACT/Calligraphy-v0", out=str(tmp_path / "c.zarr"),
                         episodes=1, param=1.5, n_envs=1, progress=False)

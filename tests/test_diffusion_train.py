@@ -11,11 +11,11 @@ import torch
 from safetensors.torch import load_file
 
 from impact_envs.errors import InvalidArgumentError
-from impact_envs.policies.diffusion import train as train_module
 from impact_envs.policies.diffusion.config import DiffusionConfig
-from impact_envs.policies.diffusion.dataset import EpisodeMeta, ReplayWriter
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
-from impact_envs.policies.diffusion.train import RunOptions, lr_at, train
+from impact_learn import train as train_module
+from impact_learn.dataset import EpisodeMeta, ReplayWriter
+from impact_learn.train import RunOptions, lr_at, train
 
 torch.set_num_threads(1)
 CFG = DiffusionConfig(

@@ -10,16 +10,16 @@ import torch
 
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
-from impact_envs.policies.diffusion.dataset import (
+from impact_envs.policies.diffusion.model import make_inference_scheduler, make_network
+from impact_envs.policies.diffusion.network import ConditionalUnet1D
+from impact_envs.policies.diffusion.normalizer import Normalizer
+from impact_learn.dataset import (
     EpisodeMeta,
     ReplayWriter,
     load_replay,
     window_indices,
 )
-from impact_envs.policies.diffusion.ema import EMA
-from impact_envs.policies.diffusion.model import make_inference_scheduler, make_network
-from impact_envs.policies.diffusion.network import ConditionalUnet1D
-from impact_envs.policies.diffusion.normalizer import Normalizer
+from impact_learn.ema import EMA
 
 torch.set_num_threads(1)
 

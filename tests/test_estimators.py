@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from fake_dynamics import ConstantArmDynamics
 
 from impact_envs.control.config import EstimatorConfig
 from impact_envs.control.estimators import (
@@ -11,7 +12,6 @@ from impact_envs.control.estimators import (
     ResidualEstimator,
     make_estimator,
 )
-from impact_envs.control.fake_dynamics import ConstantArmDynamics
 from impact_envs.control.jacobian import RegularizedWrenchMap, regularized_wrench_map
 
 DT = 0.001

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from fake_dynamics import ConstantArmDynamics
 
 from impact_envs.control.config import ImpedanceConfig
-from impact_envs.control.fake_dynamics import ConstantArmDynamics
 from impact_envs.control.impedance import CartesianImpedance
 from impact_envs.control.jacobian import regularized_wrench_map
 from impact_envs.control.lie import matrix_to_quat, so3_exp

@@ -56,3 +56,14 @@ def test_refresh_covers_numba_cache_dir(tmp_path, monkeypatch):
     jit_cache.refresh_cache(sources, "new")
     assert not (mirror / "kern.tick-10.py311.nbi").exists()
     assert (mirror / jit_cache.STAMP_NAME).read_text().strip() == "new"
+
+
+def test_type_sources_define_the_named_tuples_kernels_take():
+    """Moving a kernel-argument named tuple to another module made cached kernels unloadable
+    (they pickle the type by module path); its module must count in the digest."""
+    from impact_envs.control.arm_model import DynamicsArrays
+    from impact_envs.robot.sim import SimArrays
+
+    modules = {t.__module__.removeprefix("impact_envs.").replace(".", "/") + ".py"
+               for t in (DynamicsArrays, SimArrays)}
+    assert modules == set(jit_cache.TYPE_SOURCES)

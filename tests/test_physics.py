@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from impact_eval.physics import payload_hold, wrench_recovery
+from impact_eval.experiments.physics import payload_hold, wrench_recovery
 
 
 @pytest.mark.parametrize("estimator", ["residual", "momentum"])

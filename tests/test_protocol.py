@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from impact_eval.protocol import SETTLE_S, phase_metrics, summarize
+from impact_eval.experiments.adaptation import SETTLE_S, phase_metrics, summarize
 
 
 def _episode(controller: str, episode: int, sag_m: float) -> pd.DataFrame:

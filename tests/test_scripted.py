@@ -9,7 +9,7 @@ import pytest
 
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.scripted import CARRY, LOWER, make_expert
-from impact_eval.protocol import protocol_expert
+from impact_eval.experiments.adaptation import protocol_expert
 
 
 def _carry_obs(goal: np.ndarray, carry_z: float) -> dict[str, np.ndarray]:

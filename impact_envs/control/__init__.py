@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from impact_envs.control.arm_model import ArmDynamics
 from impact_envs.control.config import (
     ControllerConfig,
     EstimatorConfig,
@@ -17,7 +18,6 @@ from impact_envs.control.config import (
     LimitsConfig,
     SlowWrenchConfig,
 )
-from impact_envs.control.protocols import ArmDynamics
 
 __all__ = [
     "ArmDynamics",

@@ -15,6 +15,7 @@ import numpy as np
 import torch
 
 from impact_envs.control import kernels
+from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.estimators import make_estimator
 from impact_envs.control.impedance import CartesianImpedance
@@ -22,7 +23,6 @@ from impact_envs.control.internal_model import InternalModel
 from impact_envs.control.kernel_layout import INPUT_ABS_MAX
 from impact_envs.control.lie import invalid_quaternion
 from impact_envs.control.limits import TorqueLimiter
-from impact_envs.control.protocols import ArmDynamics, dynamics_arrays
 from impact_envs.control.slow_filter import SlowWrenchFilter
 from impact_envs.errors import InvalidArgumentError, SimulationError, check_choice
 

@@ -15,9 +15,9 @@ from typing import Protocol
 import numpy as np
 
 from impact_envs.control import kernels
+from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
 from impact_envs.control.config import EstimatorConfig
 from impact_envs.control.jacobian import regularized_wrench_map
-from impact_envs.control.protocols import ArmDynamics, dynamics_arrays
 
 RESIDUAL, MOMENTUM = 0, 1
 """``kernel_kind`` of the two estimators (selects the kernel in ``kernels.controller_tick``)."""

@@ -17,9 +17,9 @@ from __future__ import annotations
 import numpy as np
 
 from impact_envs.control import kernels
+from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
 from impact_envs.control.config import ImpedanceConfig
 from impact_envs.control.lie import invalid_quaternion
-from impact_envs.control.protocols import ArmDynamics, dynamics_arrays
 
 
 class CartesianImpedance:

@@ -15,9 +15,9 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from impact_envs.control.arm_model import dynamics_arrays
 from impact_envs.control.controller import ImpactController, describe_bad_input
 from impact_envs.control.kernels import BAD_INPUT
-from impact_envs.control.protocols import dynamics_arrays
 from impact_envs.errors import SimulationError
 from impact_envs.loop.tick import ArmArrays, StepPlan, loop_tick
 from impact_envs.robot.dynamics import PinocchioArm

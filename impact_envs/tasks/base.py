@@ -16,7 +16,7 @@ import numpy as np
 
 from impact_envs.control.lie import rot6d_from_matrix
 from impact_envs.errors import InvalidArgumentError
-from impact_envs.policies.protocol import Policy
+from impact_envs.policies.interface import Policy
 from impact_envs.robot.sim import FrankaSim
 
 

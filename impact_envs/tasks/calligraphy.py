@@ -14,7 +14,7 @@ import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
 from impact_envs.errors import InvalidArgumentError
-from impact_envs.policies.protocol import Policy
+from impact_envs.policies.interface import Policy
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import BodyMass, Task, TaskParam

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from impact_envs.errors import InvalidArgumentError
-from impact_envs.policies.protocol import Policy
+from impact_envs.policies.interface import Policy
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import BodyMass, FreeBody, Task, TaskParam

@@ -1,16 +1,12 @@
-"""State-based Diffusion Policy baseline (Vanilla DP / Augmented DP).
+"""State-based Diffusion Policy baseline (Vanilla DP / Augmented DP): the runtime side.
 
 Public API (imported lazily, so ``import impact_envs.policies.diffusion`` stays cheap)::
 
     DiffusionConfig                       hyper-parameters (config.py)
     DiffusionPolicy.load(dir, seed=0)     trained policy, Policy protocol (policy.py)
-    RunOptions, CollectConfig, measure_inference, InferenceCost
 
-The functions ``train.train`` (``impact-train``) and ``collect.collect`` (``impact-collect``)
-share their module's name, so import them from the modules::
-
-    from impact_envs.policies.diffusion.train import train
-    from impact_envs.policies.diffusion.collect import collect
+Collecting demonstrations and training live in the ``impact_learn`` package
+(``impact-collect``, ``impact-train``).
 """
 
 from __future__ import annotations
@@ -21,10 +17,6 @@ from typing import Any
 _EXPORTS = {
     "DiffusionConfig": "config",
     "DiffusionPolicy": "policy",
-    "RunOptions": "train",
-    "CollectConfig": "collect_config",
-    "measure_inference": "bench",
-    "InferenceCost": "bench",
 }
 
 __all__ = sorted(_EXPORTS)

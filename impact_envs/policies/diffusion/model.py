@@ -12,7 +12,7 @@ from diffusers import DDIMScheduler, DDPMScheduler
 
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.network import ConditionalUnet1D
-from impact_envs.policies.protocol import ACTION_DIM
+from impact_envs.policies.interface import ACTION_DIM
 
 
 def make_network(cfg: DiffusionConfig, obs_dim: int) -> ConditionalUnet1D:

@@ -29,7 +29,7 @@ from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.model import denoise, make_inference_scheduler, make_network
 from impact_envs.policies.diffusion.network import ConditionalUnet1D
 from impact_envs.policies.diffusion.normalizer import Normalizer
-from impact_envs.policies.protocol import ACTION_DIM
+from impact_envs.policies.interface import ACTION_DIM
 
 MODEL_FILE = "model.safetensors"
 CONFIG_FILE = "config.json"

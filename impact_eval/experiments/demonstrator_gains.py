@@ -1,4 +1,5 @@
-"""``python -m impact_eval.demonstrator_gains``: the closed-loop demonstrator with other gains.
+"""The closed-loop demonstrator with other gains
+(``python -m impact_eval.experiments.demonstrator_gains``).
 
 Runs the pick-and-place expert with ``compensation="closed_loop"`` and the given proportional
 and integral gains under plain impedance, one env at a time, and prints per mass the successes
@@ -16,7 +17,7 @@ import dataclasses
 import gymnasium as gym
 import numpy as np
 
-from impact_envs.policies.protocol import stack_obs
+from impact_envs.policies.interface import stack_obs
 from impact_envs.policies.scripted import CARRY, RETREAT, PickPlaceExpert, make_expert
 
 
@@ -38,7 +39,7 @@ at each step of its carry phase."""
 
 def main(argv: list[str] | None = None) -> None:
     """Print successes and the carry-height error range per mass."""
-    parser = argparse.ArgumentParser(prog="python -m impact_eval.demonstrator_gains")
+    parser = argparse.ArgumentParser(prog="python -m impact_eval.experiments.demonstrator_gains")
     parser.add_argument("--env", default="IMPACT/Hammer-v0", help="a pick-and-place env id")
     parser.add_argument("--kp", type=float, required=True, help="lift_gain [-]")
     parser.add_argument("--ki", type=float, required=True, help="lift_gain_per_s [1/s]")

@@ -12,16 +12,16 @@ from diffusers import DDPMScheduler
 
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
-from impact_envs.policies.diffusion.dataset import (
+from impact_envs.policies.diffusion.model import make_train_scheduler
+from impact_envs.policies.diffusion.normalizer import Normalizer
+from impact_envs.policies.diffusion.policy import GRIPPER_DIM
+from impact_learn.dataset import (
     ACTION_KEY,
     ReplayData,
     WindowSampler,
     load_replay,
     window_indices,
 )
-from impact_envs.policies.diffusion.model import make_train_scheduler
-from impact_envs.policies.diffusion.normalizer import Normalizer
-from impact_envs.policies.diffusion.policy import GRIPPER_DIM
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,5 @@
-"""``python -m impact_eval.demo_ambiguity DATA.zarr``: can a state-based policy tell the mass?
+"""Can a state-based policy tell the mass? (``python -m impact_eval.experiments.demo_ambiguity
+DATA.zarr``)
 
 For a demonstration store collected over a mass range, this measures how far the commanded
 height of the light demos differs from that of their nearest neighbours in the policy's own
@@ -17,8 +18,8 @@ import argparse
 
 import numpy as np
 
-from impact_envs.policies.diffusion.dataset import load_replay
 from impact_envs.policies.diffusion.normalizer import fit_minmax
+from impact_learn.dataset import load_replay
 
 OBS_KEYS = ("ee_pos", "ee_rot6d", "gripper_width", "object_pos", "object_rot6d", "goal_pos")
 
@@ -56,7 +57,7 @@ def stacked_features(data: dict[str, np.ndarray], rows: np.ndarray,
 def main(argv: list[str] | None = None) -> None:
     """Print, for light and heavy demos, the commanded height above the TCP in their own lift
     states and among the ``--k`` nearest lift states of other demos."""
-    parser = argparse.ArgumentParser(prog="python -m impact_eval.demo_ambiguity")
+    parser = argparse.ArgumentParser(prog="python -m impact_eval.experiments.demo_ambiguity")
     parser.add_argument("data", help="demonstration store (*.zarr) over a mass range")
     parser.add_argument("--light-kg", type=float, default=1.0, help="'light': mass below this")
     parser.add_argument("--heavy-kg", type=float, default=5.0, help="'heavy': mass above this")

@@ -1,6 +1,7 @@
 """Per-tick cost of ``ImpactController.compute`` excluding the dynamics update.
 
-Run ``OMP_NUM_THREADS=1 python -m impact_envs.control.bench``. The model is updated once at a
+Run ``OMP_NUM_THREADS=1 python -m impact_eval.experiments.controller_cost``. The model is
+updated once at a
 fixed state and its ``update`` is then replaced by a no-op, so the timing covers only the
 controller core (impedance, estimator, slow filter, internal-model inference, limits), in mode
 "impact" and in mode "impedance" (no internal model). Learning ticks (one SGD step every
@@ -16,24 +17,13 @@ import timeit
 import numpy as np
 import torch
 
+from impact_envs.control.arm_model import ArmDynamics
 from impact_envs.control.config import ControllerConfig, EstimatorConfig
 from impact_envs.control.controller import ImpactController
-from impact_envs.control.fake_dynamics import ConstantArmDynamics
 from impact_envs.control.lie import matrix_to_quat
-from impact_envs.control.protocols import ArmDynamics
+from impact_envs.robot.dynamics import PinocchioArm
 
 Q_BENCH = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
-
-
-def _dynamics(use_fake: bool) -> tuple[ArmDynamics, str]:
-    if not use_fake:
-        try:
-            from impact_envs.robot.dynamics import PinocchioArm
-
-            return PinocchioArm(), "PinocchioArm"
-        except ImportError:
-            pass
-    return ConstantArmDynamics(), "ConstantArmDynamics"
 
 
 def _time_us(fn, number: int, repeat: int) -> float:
@@ -57,10 +47,10 @@ def _compute_us(dyn: ArmDynamics, mode: str, kind: str, number: int, repeat: int
     return _time_us(lambda: ctrl.compute(q, dq, tau, pos, quat), number, repeat), ctrl
 
 
-def run(kind: str, use_fake: bool, number: int, repeat: int) -> dict[str, float]:
+def run(kind: str, number: int, repeat: int) -> dict[str, float]:
     """Per-call timings [us]: dynamics update, ``compute`` without it (both modes), the fused
     kernel alone, the internal model's forward pass and one SGD step."""
-    dyn, name = _dynamics(use_fake)
+    dyn, name = PinocchioArm(), "PinocchioArm"
     q, dq = Q_BENCH.copy(), np.full(7, 0.01)
     dyn.update(q, dq)
     t_update = _time_us(lambda: dyn.update(q, dq), number, repeat)
@@ -85,12 +75,11 @@ def main(argv: list[str] | None = None) -> None:
     """CLI entry point: print the timings."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--estimator", choices=("residual", "momentum"), default="residual")
-    parser.add_argument("--fake", action="store_true", help="use ConstantArmDynamics")
     parser.add_argument("--number", type=int, default=5000)
     parser.add_argument("--repeat", type=int, default=5)
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
-    res = run(args.estimator, args.fake, args.number, args.repeat)
+    res = run(args.estimator, args.number, args.repeat)
     print(
         f"{res['dynamics']} ({args.estimator}): dynamics.update {res['update_us']:.1f} us, "
         f"compute() without update {res['compute_us']:.1f} us (impact), "

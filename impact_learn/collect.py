@@ -32,9 +32,9 @@ from tqdm import tqdm
 import impact_envs
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError
-from impact_envs.policies.diffusion.collect_config import CollectConfig, parse_param_spec
-from impact_envs.policies.diffusion.collect_run import AttemptSpec, Expert, run_attempts
-from impact_envs.policies.diffusion.dataset import EpisodeMeta, ReplayWriter
+from impact_learn.collect_config import CollectConfig, parse_param_spec
+from impact_learn.collect_run import AttemptSpec, Expert, run_attempts
+from impact_learn.dataset import EpisodeMeta, ReplayWriter
 
 
 def attempt_seed(base_seed: int, attempt: int) -> int:

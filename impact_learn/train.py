@@ -25,13 +25,13 @@ import torch
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError, TrainingError
 from impact_envs.policies.diffusion.config import DiffusionConfig
-from impact_envs.policies.diffusion.ema import EMA
 from impact_envs.policies.diffusion.model import diffusion_loss, make_network
 from impact_envs.policies.diffusion.normalizer import Normalizer
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
-from impact_envs.policies.diffusion.train_data import TrainData, load_train_data
-from impact_envs.policies.diffusion.train_log import TrainLog, evaluate
-from impact_envs.policies.diffusion.train_state import (
+from impact_learn.ema import EMA
+from impact_learn.train_data import TrainData, load_train_data
+from impact_learn.train_log import TrainLog, evaluate
+from impact_learn.train_state import (
     TrainState,
     find_train_state,
     load_train_state,

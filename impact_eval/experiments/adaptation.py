@@ -51,7 +51,7 @@ import pandas as pd
 import impact_envs
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
-from impact_envs.policies.protocol import stack_obs
+from impact_envs.policies.interface import stack_obs
 from impact_envs.policies.scripted import PickPlaceExpert, make_expert
 
 PHASES = ("A", "B", "C")

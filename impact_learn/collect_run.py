@@ -8,7 +8,7 @@ from typing import Protocol
 import gymnasium as gym
 import numpy as np
 
-from impact_envs.policies.protocol import stack_obs
+from impact_envs.policies.interface import stack_obs
 
 
 class Expert(Protocol):

@@ -15,7 +15,7 @@ from impact_envs.policies.diffusion.model import (
     make_inference_scheduler,
 )
 from impact_envs.policies.diffusion.network import ConditionalUnet1D
-from impact_envs.policies.diffusion.train_data import TrainData
+from impact_learn.train_data import TrainData
 
 LOG_COLUMNS = ("step", "lr", "train_loss", "val_loss", "val_action_mse", "elapsed_s")
 """log.csv columns: optimizer step, learning rate, mean training loss since the previous row,

@@ -2,8 +2,8 @@
 
 Usage::
 
-    python -m impact_envs.policies.diffusion.bench [--checkpoint DIR] [--batch 32] [--threads 1]
-        [--train] [--env IMPACT/Hammer-v0]
+    python -m impact_eval.experiments.dp_inference_cost [--checkpoint DIR] [--batch 32] \
+        [--threads 1] [--train] [--env IMPACT/Hammer-v0]
 
 It also measures the env's own step cost in the same run and prints the ratio.
 
@@ -102,7 +102,7 @@ def measure_env_step(env_id: str, controller: str = "impact", steps: int = 90,
     import gymnasium as gym
 
     import impact_envs  # noqa: F401 - registers the env ids
-    from impact_envs.policies.protocol import stack_obs
+    from impact_envs.policies.interface import stack_obs
     from impact_envs.policies.scripted import make_expert
 
     env = gym.make(env_id, controller=controller)
@@ -122,8 +122,8 @@ def measure_env_step(env_id: str, controller: str = "impact", steps: int = 90,
 def measure_train_step(cfg: DiffusionConfig | None = None, steps: int = 5) -> float:
     """Median seconds of one AdamW step (forward, backward, optimizer, EMA) at
     ``cfg.batch_size`` on random data, after one warm-up step."""
-    from impact_envs.policies.diffusion.ema import EMA
     from impact_envs.policies.diffusion.model import diffusion_loss, make_train_scheduler
+    from impact_learn.ema import EMA
 
     cfg = cfg or DiffusionConfig()
     obs_dim = sum(DEFAULT_OBS_DIMS.get(k, 3) for k in cfg.obs_keys)

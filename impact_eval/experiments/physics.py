@@ -1,4 +1,4 @@
-"""Physics acceptance experiments of the controller (``python -m impact_eval.physics``).
+"""Physics acceptance experiments of the controller (``python -m impact_eval.experiments.physics``).
 
 1. **Wrench recovery**: the arm holds still in random poses; a known wrench is applied at the
    TCP (MuJoCo ``xfrc_applied``); after settling, the slow wrench estimate must equal it

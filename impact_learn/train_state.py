@@ -21,8 +21,8 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from impact_envs.errors import CheckpointError
-from impact_envs.policies.diffusion.ema import EMA
 from impact_envs.policies.diffusion.network import ConditionalUnet1D
+from impact_learn.ema import EMA
 
 TENSORS_FILE = "tensors.safetensors"
 STATE_FILE = "state.json"

@@ -1,8 +1,9 @@
-"""``python -m impact_eval.trace``: print one episode of a method, every N policy steps.
+"""``python -m impact_eval.experiments.trace``: print one episode of a method, every N policy steps.
 
 Usage::
 
-    python -m impact_eval.trace --env IMPACT/Hammer-v0 --method augmented_dp --value 0.1 --seed 1
+    python -m impact_eval.experiments.trace --env IMPACT/Hammer-v0 --method augmented_dp \
+        --value 0.1 --seed 1
 
 Columns: policy step, TCP height, commanded target height, gripper command, object height,
 internal-model prediction / slow estimate / raw estimate of the vertical wrench [N], gate
@@ -22,7 +23,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from impact_envs.errors import ImpactError
-from impact_envs.policies.protocol import stack_obs
+from impact_envs.policies.interface import stack_obs
 from impact_eval.envs import check_env_id, describe_env, make_env
 from impact_eval.methods import resolve_method
 
