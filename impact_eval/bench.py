@@ -31,8 +31,8 @@ import numpy as np
 import impact_envs
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
-from impact_envs.policies.scripted import make_expert
 
 
 @dataclass

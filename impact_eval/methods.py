@@ -132,7 +132,7 @@ def _scripted_factory(compensation: str) -> PolicyFactory:
 
     def build(env_id: str, env: gym.Env) -> Policy:
         try:
-            from impact_envs.policies.scripted import make_expert
+            from impact_envs.policies.experts import make_expert
         except ImportError as exc:
             raise InvalidArgumentError(f"no scripted experts available: {exc}") from None
         return make_expert(env_id, compensation=compensation)

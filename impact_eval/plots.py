@@ -18,6 +18,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from impact_envs.tasks.registry import TASKS  # noqa: E402
+
 METHOD_ORDER = ("scripted", "scripted_impact", "vanilla_dp", "augmented_dp", "impact")
 METHOD_LABELS = {
     "scripted": "Scripted + impedance",
@@ -30,7 +32,6 @@ METHOD_LABELS = {
     "impact_vanilla": "IMPACT, Vanilla ckpt",
     "scripted_impact_paper": "Scripted + IMPACT (paper)",
 }
-PARAM_UNITS = {"mass": "kg", "force": "N", "length": "m", "stiffness": "N/m", "time": "s"}
 FORMATS = ("png", "pdf")
 MARKERS = ("o", "s", "^", "D", "v", "P", "X")
 LINESTYLES = ("-", "--", "-.", ":")
@@ -50,10 +51,13 @@ def method_label(method: str) -> str:
     return METHOD_LABELS.get(method, method)
 
 
-def param_label(param_name: str) -> str:
-    """Axis label with unit, e.g. ``object_mass`` -> ``object mass [kg]``."""
-    unit = next((u for k, u in PARAM_UNITS.items() if param_name.endswith(k)), None)
-    text = param_name.replace("_", " ")
+def param_label(summary: pd.DataFrame) -> str:
+    """Axis label of a summary's parameter with the unit its task declares
+    (``TaskParam.unit``), e.g. ``object mass [kg]``; no unit for a plugin env's parameter."""
+    env_id, name = str(summary["env_id"].iloc[0]), str(summary["param_name"].iloc[0])
+    task = TASKS.get(env_id.split(":")[-1])
+    unit = next((p.unit for p in task.params if p.name == name), "") if task else ""
+    text = name.replace("_", " ")
     return f"{text} [{unit}]" if unit else text
 
 
@@ -106,7 +110,7 @@ def plot_surface(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
     )
     ax.set_box_aspect((2.2, 1.1, 0.8))
     ax.set_xlim(float(x.min()) - dx / 2, float(x.max()) + 1.5 * dx)
-    ax.set_xlabel(param_label(str(summary["param_name"].iloc[0])), labelpad=12)
+    ax.set_xlabel(param_label(summary), labelpad=12)
     ax.set_yticks(range(len(methods)))
     ax.set_yticklabels(
         [method_label(m) for m in methods],
@@ -121,7 +125,7 @@ def plot_surface(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
     ax.view_init(elev=28, azim=-58)
     ax.set_title(
         f"{summary['env_id'].iloc[0]}: success rate by method and "
-        f"{param_label(str(summary['param_name'].iloc[0]))}",
+        f"{param_label(summary)}",
         pad=0,
     )
     return _save(fig, out_dir, "success_surface")
@@ -158,7 +162,7 @@ def _lines(
             ax.fill_between(x, y - std, y + std, color=colors[method], alpha=0.15, lw=0)
     ax.grid(alpha=0.3)
     ax.ticklabel_format(axis="y", useOffset=False)
-    ax.set_xlabel(param_label(str(summary["param_name"].iloc[0])))
+    ax.set_xlabel(param_label(summary))
 
 
 def plot_success(summary: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:

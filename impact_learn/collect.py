@@ -77,7 +77,7 @@ def default_expert_factory(cfg: CollectConfig) -> Callable[[], Expert]:
     """Factory of the scripted expert of ``cfg.env_id``."""
 
     def make() -> Expert:
-        from impact_envs.policies.scripted import make_expert
+        from impact_envs.policies.experts import make_expert
 
         return make_expert(cfg.env_id, compensation=cfg.compensation)
 

@@ -45,7 +45,8 @@ CASES: dict[str, tuple[str, tuple[str, ...], str]] = {
     "eval unknown option": ("eval", ("--mases", "1"), "unrecognized arguments"),
     "eval unknown controller field": ("eval", ("--controller-set", "internal_model.lr=1"),
                                       "unknown field 'lr' of controller config section"),
-    "eval no scripted expert": ("eval", ("--method", "scripted"), "cannot build method"),
+    "eval no scripted expert": ("eval", ("--method", "scripted"),
+                                "no scripted expert for 'ImpactTest/Fake-v0'"),
     "eval torque above the FR3": (
         "eval", ("--controller-set", "limits.torque_max_nm=1000,87,87,87,12,12,12"),
         "limits.torque_max_nm[0]=1000 > 87 Nm: above the FR3's hardware limits"),

@@ -243,7 +243,7 @@ def test_policy_learns_fake_reach(tmp_path):
 
 def _real_hammer_or_skip() -> None:
     try:
-        from impact_envs.policies.scripted import make_expert
+        from impact_envs.policies.experts import make_expert
 
         make_expert("IMPACT/Hammer-v0")
         gym.make("IMPACT/Hammer-v0", controller="impedance", object_mass=0.2).reset(seed=0)

@@ -9,8 +9,8 @@ from gymnasium.utils.env_checker import check_env
 
 import impact_envs
 from impact_envs.errors import InvalidArgumentError
+from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
-from impact_envs.policies.scripted import make_expert
 
 ENV_IDS = impact_envs.ENV_IDS
 

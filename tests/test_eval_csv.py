@@ -105,3 +105,17 @@ def test_success_table_markdown_has_one_cell_per_method_and_value():
     assert lines[0] == "| object_mass | a | b |"
     assert lines[2] == "| 0.2 | 3/4 (75%, 30%–95%) | 4/4 (100%, 50%–100%) |"
     assert lines[3] == "| 5 | 0/4 (0%, 0%–50%) | — |"
+
+
+def test_plot_axis_label_takes_the_unit_the_task_declares():
+    import pandas as pd
+
+    from impact_eval.plots import param_label
+
+    def label(env_id: str, name: str) -> str:
+        return param_label(pd.DataFrame({"env_id": [env_id], "param_name": [name]}))
+
+    assert label("IMPACT/Hammer-v0", "object_mass") == "object mass [kg]"
+    assert label("IMPACT/Disturbance-v0", "disturbance_n") == "disturbance n [N]"
+    assert label("IMPACT/Calligraphy-v0", "surface_friction") == "surface friction"
+    assert label("test_eval_fake:ImpactTest/Fake-v0", "object_mass") == "object mass"

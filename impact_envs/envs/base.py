@@ -8,6 +8,7 @@ steps), runs the controller on *noisy* sensor readings every tick, and applies t
 from __future__ import annotations
 
 import dataclasses
+import importlib
 from typing import Any, Literal
 
 import gymnasium as gym
@@ -24,12 +25,36 @@ from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.loop import ClosedLoop, TickTargets
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
 from impact_envs.robot.sim import FrankaSim, SensorNoise
-from impact_envs.tasks.base import Task, refresh_constants
+from impact_envs.tasks.base import ObsEntry, Task, refresh_constants
 
 POLICY_HZ = 30
 CONTROL_HZ = 1000
 CONTROLLERS = ("impact", "impedance")
 ESTIMATORS = ("residual", "momentum")
+
+
+ROBOT_OBSERVATIONS = (
+    ObsEntry("ee_pos", 3, -2.0, 2.0, "m", "TCP position, forward kinematics of the encoders"),
+    ObsEntry("ee_rot6d", 6, -1.0, 1.0, "", "TCP orientation, rot6d"),
+    ObsEntry("gripper_width", 1, 0.0, 0.1, "m", "finger opening"),
+    ObsEntry("joint_pos", 7, -np.inf, np.inf, "rad", "encoder reading (bounds: joint limits "
+             "+- 0.1 rad)"),
+    ObsEntry("joint_vel", 7, -10.0, 10.0, "rad/s", "encoder velocity reading"),
+)
+"""The robot's observation entries, first in every env (no force sensing in observations)."""
+
+
+def _load_task(ref: str) -> Task:
+    """A task instance from ``"module:TaskClass"`` (the generic env's ``task`` argument)."""
+    module, _, name = ref.partition(":")
+    try:
+        task_cls = getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError, ValueError) as exc:
+        raise InvalidArgumentError(f"cannot load task {ref!r}: {exc}; valid: "
+                                   "'module:TaskClass' of an importable Task") from None
+    if not (isinstance(task_cls, type) and issubclass(task_cls, Task)):
+        raise InvalidArgumentError(f"task {ref!r} is not a Task subclass")
+    return task_cls()
 
 
 def ticks_for_step(k: int) -> int:
@@ -54,12 +79,14 @@ class ImpactEnv(gym.Env):
 
     @classmethod
     def make_task(cls) -> Task:
-        """The task this environment runs (subclasses override)."""
-        raise NotImplementedError
+        """The task this environment runs (a documented subclass overrides this; the generic
+        env gets its task from the ``task`` argument)."""
+        raise InvalidArgumentError(f"{cls.__name__} needs task='module:TaskClass'")
 
     def __init__(
         self,
         *,
+        task: str | None = None,
         controller: Literal["impact", "impedance"] = "impact",
         object_mass: float | None = None,
         task_params: dict[str, float] | None = None,
@@ -81,7 +108,7 @@ class ImpactEnv(gym.Env):
         check_choice("controller_preset", controller_preset, PRESETS)
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
-        self.task = task = self.make_task()
+        self.task = task = self.make_task() if task is None else _load_task(task)
         self.render_mode = render_mode
         self.controller_mode = controller
         self.terminate_on_success = bool(terminate_on_success)
@@ -122,19 +149,19 @@ class ImpactEnv(gym.Env):
 
     # ------------------------------------------------------------------ spaces
     def _make_observation_space(self) -> spaces.Dict:
-        def box(low: float | np.ndarray, high: float | np.ndarray, n: int) -> spaces.Box:
-            return spaces.Box(np.broadcast_to(low, (n,)).astype(np.float32),
-                              np.broadcast_to(high, (n,)).astype(np.float32), dtype=np.float32)
-
+        """The robot's entries (``ROBOT_OBSERVATIONS``, joint bounds from the model) then the
+        task's declared ones, in that order."""
+        dyn = self.dynamics
+        bounds = {"joint_pos": (dyn.q_lower - 0.1, dyn.q_upper + 0.1)}
+        entries = (*ROBOT_OBSERVATIONS, *self.task.observations)
+        names = [e.name for e in entries]
+        if len(set(names)) != len(names):
+            raise InvalidArgumentError(f"{self.task.name}: observation names repeat: {names}")
         return spaces.Dict({
-            "ee_pos": box(-2.0, 2.0, 3),
-            "ee_rot6d": box(-1.0, 1.0, 6),
-            "gripper_width": box(0.0, 0.1, 1),
-            "joint_pos": box(self.dynamics.q_lower - 0.1, self.dynamics.q_upper + 0.1, 7),
-            "joint_vel": box(-10.0, 10.0, 7),
-            "object_pos": box(-2.0, 2.0, 3),
-            "object_rot6d": box(-1.0, 1.0, 6),
-            "goal_pos": box(-2.0, 2.0, 3),
+            e.name: spaces.Box(*(np.broadcast_to(b, (e.size,)).astype(np.float32)
+                                 for b in bounds.get(e.name, (e.low, e.high))),
+                               dtype=np.float32)
+            for e in entries
         })
 
     # ------------------------------------------------------------------ params

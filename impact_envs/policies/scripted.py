@@ -25,7 +25,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import gymnasium as gym
 import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
@@ -255,14 +254,32 @@ class PickPlaceExpert:
         return np.concatenate([target, rot6d_from_matrix(self.rot[i]), [self.grip[i]]])
 
 
-def make_expert(env_id: str, compensation: str = "none") -> PickPlaceExpert:
-    """The scripted expert of a registered IMPACT env id."""
-    import impact_envs  # noqa: F401  (registers the envs)
+def hammer_expert(compensation: str = "none") -> PickPlaceExpert:
+    """The pick-and-place expert of ``IMPACT/Hammer-v0`` (grasp at the handle's COM)."""
+    from impact_envs.tasks.hammer import HANDLE_HALF_HEIGHT_M, PAD_CLEARANCE_M
 
-    try:
-        spec = gym.spec(env_id)
-    except gym.error.Error as exc:
-        ids = sorted(k for k in gym.registry if k.startswith("IMPACT/"))
-        raise InvalidArgumentError(f"unknown env {env_id!r}; valid: {', '.join(ids)}") from exc
-    env_cls = gym.envs.registration.load_env_creator(spec.entry_point)
-    return env_cls.make_task().make_expert(compensation=compensation)
+    spec = PickPlaceSpec(
+        grasp_offset_obj=(0.0, 0.0, 0.0),
+        grasp_z=HANDLE_HALF_HEIGHT_M + PAD_CLEARANCE_M,
+        hover_z=0.12,
+        carry_z=0.18,
+        place_z=0.045,
+        place_offset_goal=0.07,
+    )
+    return PickPlaceExpert(spec, compensation=compensation)
+
+
+def dumbbell_expert(compensation: str = "none") -> PickPlaceExpert:
+    """The pick-and-place expert of ``IMPACT/Dumbbell-v0`` (grasp at the bar centre)."""
+    from impact_envs.tasks.dumbbell import PAD_TOP_M, PLATE_APOTHEM_M
+
+    spec = PickPlaceSpec(
+        grasp_offset_obj=(0.0, 0.0, 0.0),
+        grasp_z=PLATE_APOTHEM_M,
+        hover_z=0.14,
+        carry_z=0.20,
+        place_z=PAD_TOP_M + PLATE_APOTHEM_M + 0.004,
+        place_offset_goal=0.0,
+        lift_margin_m=0.07,
+    )
+    return PickPlaceExpert(spec, compensation=compensation)

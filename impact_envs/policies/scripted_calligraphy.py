@@ -11,7 +11,7 @@ While writing (the reference is on the paper) it corrects the tangential (x, y) 
 with a PI law on the observed pen tip, as a writer steers the pen against paper drag and
 joint friction; the normal direction is never corrected (no force sensing in observations).
 
-There is no privileged load compensation (``CalligraphyTask.make_expert`` refuses it): raising
+There is no load compensation (``calligraphy_expert`` refuses it): raising
 the targets by ``m g / K_z`` lifts the commanded tip off the paper, and the task presses only
 while the commanded tip is on it (docs/envs.md).
 """
@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from impact_envs.control.lie import rot6d_from_matrix
+from impact_envs.errors import InvalidArgumentError
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])
 """TCP pointing down with its x axis along world +x (the home yaw)."""
@@ -85,3 +86,20 @@ class CalligraphyExpert:
         lim = self.max_correction_m
         self.integral[i] = np.clip(self.integral[i] + self.ki_per_s * err / 30.0, -lim, lim)
         return np.clip(self.kp * err + self.integral[i], -lim, lim)
+
+
+def calligraphy_expert(compensation: str = "none") -> CalligraphyExpert:
+    """The pen-following expert of ``IMPACT/Calligraphy-v0``.
+
+    Raises:
+        InvalidArgumentError: ``compensation`` other than ``"none"``: raised targets would lift
+            the commanded tip off the paper, and the task presses only while it is on it.
+    """
+    from impact_envs.tasks.calligraphy import PAPER_TOP_M, PEN_TIP_OFFSET_M
+
+    if compensation != "none":
+        raise InvalidArgumentError(
+            "IMPACT/Calligraphy-v0 has no load-compensating expert (raised targets lift the "
+            "commanded pen tip off the paper, so the task would never press); valid: "
+            "compensation='none'")
+    return CalligraphyExpert(PEN_TIP_OFFSET_M, PAPER_TOP_M)

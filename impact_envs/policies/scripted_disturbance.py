@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.scripted import CARRY, PickPlaceExpert, PickPlaceSpec
 
 NEVER = 10**9
@@ -47,3 +48,21 @@ def make_carry_hold_expert(grasp_z: float) -> CarryHoldExpert:
         timeouts_steps=(90, 60, 18, 450, NEVER, NEVER, NEVER, NEVER),
     )
     return CarryHoldExpert(spec)
+
+
+def disturbance_expert(compensation: str = "none") -> CarryHoldExpert:
+    """Pick, carry to the goal and hold: the expert of ``IMPACT/Disturbance-v0``.
+
+    Raises:
+        InvalidArgumentError: ``compensation`` other than ``"none"``: the pick-and-place
+            experts compensate an object's weight, but this env's swept parameter is a
+            disturbance force with a random direction and time profile.
+    """
+    from impact_envs.tasks.disturbance import REST_Z_M
+
+    if compensation != "none":
+        raise InvalidArgumentError(
+            "IMPACT/Disturbance-v0 has no load-compensating expert (its parameter is a "
+            "random, time-varying disturbance force, not a mass); valid: "
+            "compensation='none'")
+    return make_carry_hold_expert(REST_Z_M)

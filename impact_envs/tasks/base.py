@@ -1,7 +1,11 @@
-"""Task side of an environment (dm_control style): randomization, observation, success, expert.
+"""Task side of an environment (dm_control style): randomization, observation, success.
 
-A task knows its scene file, its objects and its varying physical parameters; the robot side
-(``robot/sim.py``) knows bodies, sensors and contacts; ``envs/base.py`` combines the two.
+A task declares itself: its env id, scene file, objects, varying physical parameters
+(``TaskParam``: name, default, range, unit) and observation entries (``ObsEntry``); the env
+builds its spaces and its ``reset(options=...)`` validation from that, and
+``tasks/registry.py`` registers it. The robot side (``robot/sim.py``) knows bodies, sensors
+and contacts; ``envs/base.py`` combines the two. Scripted experts are looked up by task name
+(``policies/experts.py``). docs/adding_a_task.md walks through a new task.
 """
 
 from __future__ import annotations
@@ -16,7 +20,6 @@ import numpy as np
 
 from impact_envs.control.lie import rot6d_from_matrix
 from impact_envs.errors import InvalidArgumentError
-from impact_envs.policies.interface import Policy
 from impact_envs.robot.sim import FrankaSim
 
 
@@ -51,6 +54,33 @@ class TaskParam:
                 f"{self.name}={value!r} out of range; valid: {self.low} to {self.high} {self.unit}"
             )
         return v
+
+
+@dataclass(frozen=True)
+class ObsEntry:
+    """One flat float32 entry of the observation ``Dict`` (a Box of ``size`` values).
+
+    Attributes:
+        name: key in the observation.
+        size: number of values.
+        low, high: bounds of every value (observations are clipped to them).
+        unit: unit string ("" for none).
+        description: what it is, for docs and ``describe_observations``.
+    """
+
+    name: str
+    size: int
+    low: float
+    high: float
+    unit: str
+    description: str
+
+
+OBJECT_POSE = (
+    ObsEntry("object_pos", 3, -2.0, 2.0, "m", "object centre of mass, world frame"),
+    ObsEntry("object_rot6d", 6, -1.0, 1.0, "", "object orientation, rot6d"),
+)
+"""The observation entries of ``FreeBody.observe``."""
 
 
 class BodyMass:
@@ -108,6 +138,14 @@ class Task(ABC):
     max_episode_steps: int
     workspace_low: np.ndarray
     workspace_high: np.ndarray
+    env_id: ClassVar[str]
+    """Gymnasium id under which ``tasks/registry.py`` registers the task's env."""
+    observations: ClassVar[tuple[ObsEntry, ...]]
+    """The task's observation entries (after the robot's, ``envs/base.ROBOT_OBSERVATIONS``);
+    ``observation()`` returns exactly these keys."""
+    env_entry_point: ClassVar[str | None] = None
+    """"module:Class" of an ``ImpactEnv`` subclass documenting this task; None registers the
+    generic ``ImpactEnv`` with this task."""
     has_tick_hook: ClassVar[bool] = False
     """Declared capability: True when the task overrides ``before_tick`` (the closed loop then
     calls it before every 1 kHz tick). Checked when the subclass is defined."""
@@ -146,16 +184,11 @@ class Task(ABC):
 
     @abstractmethod
     def observation(self, sim: FrankaSim) -> dict[str, np.ndarray]:
-        """Task part of the observation: ``object_pos``, ``object_rot6d``, ``goal_pos``."""
+        """Task part of the observation: one array per entry of ``observations``."""
 
     @abstractmethod
     def is_success(self, sim: FrankaSim) -> bool:
         """Whether the task is accomplished in the current state."""
-
-    @abstractmethod
-    def make_expert(self, compensation: str = "none") -> Policy:
-        """The scripted expert (acts on batched observations of this task); ``compensation``:
-        how it meets a load's sag (``policies.scripted.COMPENSATIONS``)."""
 
     def before_tick(self, sim: FrankaSim, time_s: float) -> None:  # noqa: B027
         """Hook run before every 1 kHz tick (e.g. external disturbances) when the task

@@ -13,11 +13,9 @@ import mujoco
 import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.policies.interface import Policy
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import BodyMass, Task, TaskParam
+from impact_envs.tasks.base import BodyMass, ObsEntry, Task, TaskParam
 from impact_envs.tasks.calligraphy_force import NormalForceCommand
 from impact_envs.tasks.calligraphy_strokes import (
     CHARACTERS,
@@ -75,6 +73,14 @@ class CalligraphyTask(Task):
     """Write one randomly chosen, placed and rotated character with a hand-held pen."""
 
     has_tick_hook = True
+    env_id = "IMPACT/Calligraphy-v0"
+    env_entry_point = "impact_envs.envs.calligraphy:CalligraphyEnv"
+    observations = (
+        ObsEntry("object_pos", 3, -2.0, 2.0, "m", "pen-tip point, world frame"),
+        ObsEntry("object_rot6d", 6, -1.0, 1.0, "", "pen orientation (z along the pen)"),
+        ObsEntry("goal_pos", 3, -2.0, 2.0, "m",
+                 "pen-tip reference at the end of the coming policy step"),
+    )
 
     name = "calligraphy"
     scene_xml = "calligraphy_scene.xml"
@@ -216,20 +222,3 @@ class CalligraphyTask(Task):
             "failure_reason": missed_criteria(summary) if done else "",
             **summary,
         }
-
-    def make_expert(self, compensation: str = "none") -> Policy:
-        """The pen-following expert (``policies/scripted_calligraphy.py``).
-
-        Raises:
-            InvalidArgumentError: ``compensation`` other than ``"none"``: raised targets
-                would lift the commanded tip off the paper, and the task presses only while it
-                is on the paper.
-        """
-        from impact_envs.policies.scripted_calligraphy import CalligraphyExpert
-
-        if compensation != "none":
-            raise InvalidArgumentError(
-                "IMPACT/Calligraphy-v0 has no load-compensating expert (raised targets lift the "
-                "commanded pen tip off the paper, so the task would never press); valid: "
-                "compensation='none'")
-        return CalligraphyExpert(PEN_TIP_OFFSET_M, PAPER_TOP_M)

@@ -14,11 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.policies.interface import Policy
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import BodyMass, FreeBody, Task, TaskParam
+from impact_envs.tasks.base import OBJECT_POSE, BodyMass, FreeBody, ObsEntry, Task, TaskParam
 
 KINDS = ("constant", "step", "slow")
 """Disturbance profile kinds."""
@@ -91,6 +89,9 @@ class DisturbanceTask(Task):
     """Pick the trough, carry it to the goal point and hold it under disturbances."""
 
     has_tick_hook = True
+    env_id = "IMPACT/Disturbance-v0"
+    env_entry_point = "impact_envs.envs.disturbance:DisturbanceEnv"
+    observations = (*OBJECT_POSE, ObsEntry("goal_pos", 3, -2.0, 2.0, "m", "hold goal"))
 
     name = "disturbance"
     scene_xml = "disturbance_scene.xml"
@@ -211,20 +212,3 @@ class DisturbanceTask(Task):
             "is_grasped": self._held,
             "hold_s": self.hold_s(t),
         }
-
-    def make_expert(self, compensation: str = "none") -> Policy:
-        """Pick, carry to the goal and hold (``policies/scripted_disturbance.py``).
-
-        Raises:
-            InvalidArgumentError: ``compensation`` other than ``"none"``: the pick-and-place
-                experts compensate an object's weight, but this env's swept parameter is a
-                disturbance force with a random direction and time profile.
-        """
-        from impact_envs.policies.scripted_disturbance import make_carry_hold_expert
-
-        if compensation != "none":
-            raise InvalidArgumentError(
-                "IMPACT/Disturbance-v0 has no load-compensating expert (its parameter is a "
-                "random, time-varying disturbance force, not a mass); valid: "
-                "compensation='none'")
-        return make_carry_hold_expert(REST_Z_M)

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.policies.scripted import PickPlaceExpert, PickPlaceSpec
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import BodyMass, FreeBody, Task, TaskParam
+from impact_envs.tasks.base import OBJECT_POSE, BodyMass, FreeBody, ObsEntry, Task, TaskParam
 
 PLATE_APOTHEM_M = 0.0433
 """Half height of the hexagonal plates [m]: the bar centre (= COM) height when lying flat."""
@@ -24,9 +23,12 @@ class DumbbellTask(Task):
     """Pick the dumbbell at its bar centre and place it flat on the pad."""
 
     name = "dumbbell"
+    env_id = "IMPACT/Dumbbell-v0"
+    env_entry_point = "impact_envs.envs.dumbbell:DumbbellEnv"
     scene_xml = "dumbbell_scene.xml"
     object_bodies = ("dumbbell",)
     params = (TaskParam("object_mass", 2.5, 0.1, 12.0, "kg"),)
+    observations = (*OBJECT_POSE, ObsEntry("goal_pos", 3, -2.0, 2.0, "m", "pad centre"))
     max_episode_steps = 750
     workspace_low = np.array([0.15, -0.45, 0.0])
     workspace_high = np.array([0.70, 0.45, 0.60])
@@ -80,15 +82,3 @@ class DumbbellTask(Task):
         footprint, height = self._on_pad(sim)
         return {"is_grasped": sim.object_finger_contacts("dumbbell") >= 2,
                 "on_pad": footprint and height}
-
-    def make_expert(self, compensation: str = "none") -> PickPlaceExpert:
-        spec = PickPlaceSpec(
-            grasp_offset_obj=(0.0, 0.0, 0.0),
-            grasp_z=PLATE_APOTHEM_M,
-            hover_z=0.14,
-            carry_z=0.20,
-            place_z=PAD_TOP_M + PLATE_APOTHEM_M + 0.004,
-            place_offset_goal=0.0,
-            lift_margin_m=0.07,
-        )
-        return PickPlaceExpert(spec, compensation=compensation)

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.policies.scripted import PickPlaceExpert, PickPlaceSpec
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import BodyMass, FreeBody, Task, TaskParam
+from impact_envs.tasks.base import OBJECT_POSE, BodyMass, FreeBody, ObsEntry, Task, TaskParam
 
 HANDLE_HALF_HEIGHT_M = 0.0125
 """Half thickness of the square handle [m]; the hammer lies flat at this COM height."""
@@ -23,9 +22,12 @@ class HammerTask(Task):
     """Pick the hammer at its centre of mass and place it inside the basket."""
 
     name = "hammer"
+    env_id = "IMPACT/Hammer-v0"
+    env_entry_point = "impact_envs.envs.hammer:HammerEnv"
     scene_xml = "hammer_scene.xml"
     object_bodies = ("hammer",)
     params = (TaskParam("object_mass", 0.2, 0.05, 12.0, "kg"),)
+    observations = (*OBJECT_POSE, ObsEntry("goal_pos", 3, -2.0, 2.0, "m", "basket centre"))
     max_episode_steps = 750
     workspace_low = np.array([0.15, -0.45, 0.0])
     workspace_high = np.array([0.70, 0.45, 0.60])
@@ -69,14 +71,3 @@ class HammerTask(Task):
 
     def info(self, sim: FrankaSim) -> dict[str, float | bool]:
         return {"is_grasped": sim.object_finger_contacts("hammer") >= 2}
-
-    def make_expert(self, compensation: str = "none") -> PickPlaceExpert:
-        spec = PickPlaceSpec(
-            grasp_offset_obj=(0.0, 0.0, 0.0),
-            grasp_z=HANDLE_HALF_HEIGHT_M + PAD_CLEARANCE_M,
-            hover_z=0.12,
-            carry_z=0.18,
-            place_z=0.045,
-            place_offset_goal=0.07,
-        )
-        return PickPlaceExpert(spec, compensation=compensation)

@@ -51,8 +51,9 @@ import pandas as pd
 import impact_envs
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
+from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
-from impact_envs.policies.scripted import PickPlaceExpert, make_expert
+from impact_envs.policies.scripted import PickPlaceExpert
 
 PHASES = ("A", "B", "C")
 MAX_TARGET_VZ_M_S = 0.02

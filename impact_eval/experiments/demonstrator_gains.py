@@ -17,8 +17,9 @@ import dataclasses
 import gymnasium as gym
 import numpy as np
 
+from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
-from impact_envs.policies.scripted import CARRY, RETREAT, PickPlaceExpert, make_expert
+from impact_envs.policies.scripted import CARRY, RETREAT, PickPlaceExpert
 
 
 def run_episode(env: gym.Env, expert: PickPlaceExpert, seed: int) -> tuple[bool, np.ndarray]:

@@ -1,0 +1,62 @@
+"""Scripted experts, looked up by task name (or by env id, through the task registry).
+
+A task's expert is written for it, so policies depend on tasks, never the reverse. The
+built-in experts are imported on first use; a new task adds its own with ``register_expert``
+(docs/adding_a_task.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from importlib import import_module
+
+from impact_envs.errors import InvalidArgumentError
+from impact_envs.policies.interface import Policy
+
+ExpertFactory = Callable[[str], Policy]
+"""``factory(compensation) -> Policy`` (``compensation``: ``scripted.COMPENSATIONS``)."""
+
+_BUILTIN = {
+    "hammer": "impact_envs.policies.scripted:hammer_expert",
+    "dumbbell": "impact_envs.policies.scripted:dumbbell_expert",
+    "calligraphy": "impact_envs.policies.scripted_calligraphy:calligraphy_expert",
+    "disturbance": "impact_envs.policies.scripted_disturbance:disturbance_expert",
+}
+_REGISTERED: dict[str, ExpertFactory] = {}
+
+
+def register_expert(task_name: str, factory: ExpertFactory) -> None:
+    """Make ``make_expert`` build ``factory(compensation)`` for the task called ``task_name``."""
+    _REGISTERED[task_name] = factory
+
+
+def _factory(task_name: str) -> ExpertFactory | None:
+    if task_name in _REGISTERED:
+        return _REGISTERED[task_name]
+    if task_name in _BUILTIN:
+        module, name = _BUILTIN[task_name].split(":")
+        return getattr(import_module(module), name)
+    return None
+
+
+def make_expert(task: str, compensation: str = "none") -> Policy:
+    """The scripted expert of a task, by task name (``"hammer"``) or env id
+    (``"IMPACT/Hammer-v0"``); ``compensation``: how it meets a load's sag.
+
+    Raises:
+        InvalidArgumentError: Unknown task or env id, no expert for it, or a compensation
+            the expert does not offer (each a one-line error naming the valid choices).
+    """
+    from impact_envs.tasks.registry import TASKS  # filled by ``import impact_envs``
+
+    if "/" in task and task not in TASKS:
+        raise InvalidArgumentError(
+            f"no scripted expert for {task!r}: not a registered IMPACT task; valid: "
+            f"{', '.join(TASKS)}, or a task name")
+    name = TASKS[task].name if "/" in task else task
+    factory = _factory(name)
+    if factory is None:
+        valid = sorted({*_BUILTIN, *_REGISTERED})
+        raise InvalidArgumentError(
+            f"no scripted expert for task {name!r}; valid: {', '.join(valid)}")
+    return factory(compensation)
