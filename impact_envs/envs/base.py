@@ -284,7 +284,6 @@ class ImpactEnv(gym.Env):
             "is_success": bool(success),
             "success_once": bool(self._success_once),
             self.param_name: float(self._episode_params[self.param_name]),
-            "object_mass": float(self._episode_params.get("object_mass", np.nan)),
             "pose_error_m": float(np.linalg.norm(pos_error)),
             "pos_error_world": pos_error,
             "wrench_ext_world": s.wrench_ext_world.copy(),
