@@ -73,7 +73,7 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
         from impact_envs.control.overrides import apply_overrides
         from impact_envs.control.presets import preset_config
 
-        extra["controller_config"] = apply_overrides(preset_config(preset), overrides)
+        extra["controller_preset"] = apply_overrides(preset_config(preset), overrides)
     try:
         return gym.make(env_id, controller=controller, **extra)
     except ImpactError:

@@ -8,6 +8,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import impact_envs
+from impact_envs.envs.options import RenderOptions
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
@@ -78,7 +79,7 @@ def test_observations_finite_and_in_space(env_id):
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_rgb_array_render(env_id):
-    env = gym.make(env_id, render_mode="rgb_array", width=64, height=48)
+    env = gym.make(env_id, render_mode="rgb_array", render=RenderOptions(width=64, height=48))
     env.reset(seed=0)
     frame = env.render()
     assert frame.shape == (48, 64, 3) and frame.dtype == np.uint8 and frame.std() > 1.0

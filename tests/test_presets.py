@@ -67,7 +67,7 @@ def test_env_kwarg_selects_the_preset_and_info_reports_it() -> None:
         assert info["controller_preset"] == name
         env.close()
     custom = apply_overrides(ControllerConfig(), ["internal_model.learning_rate=0.02"])
-    env = gym.make("IMPACT/Hammer-v0", controller_config=custom)
+    env = gym.make("IMPACT/Hammer-v0", controller_preset=custom)
     assert env.reset(seed=0)[1]["controller_preset"] == "custom"
     env.close()
     with pytest.raises(InvalidArgumentError, match="valid choices: default, paper"):

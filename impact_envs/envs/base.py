@@ -21,6 +21,7 @@ from impact_envs.control.controller import ImpactController
 from impact_envs.control.internal_model import ModelSnapshot
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.control.presets import PRESETS, preset_config, preset_name
+from impact_envs.envs.options import RenderOptions, RobotOptions
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.loop import ClosedLoop, TickTargets
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
@@ -62,12 +63,13 @@ def ticks_for_step(k: int) -> int:
     return (k + 1) * CONTROL_HZ // POLICY_HZ - k * CONTROL_HZ // POLICY_HZ
 
 
-def _controller_config(preset: str, estimator: str,
-                       config: ControllerConfig | None) -> tuple[ControllerConfig, str]:
-    """The env's controller config and its preset name: ``preset`` with the ``estimator``
-    kind, or ``config`` as given (named after the preset it equals, else "custom")."""
-    if config is not None:
-        return config, preset_name(config)
+def _controller_config(preset: str | ControllerConfig,
+                       estimator: str) -> tuple[ControllerConfig, str]:
+    """The env's controller config and its preset name: the named preset with the
+    ``estimator`` kind, or a ``ControllerConfig`` as given (named after the preset it equals,
+    else "custom")."""
+    if isinstance(preset, ControllerConfig):
+        return preset, preset_name(preset)
     cfg = dataclasses.replace(preset_config(preset), estimator=EstimatorConfig(kind=estimator))
     return cfg, preset
 
@@ -91,21 +93,18 @@ class ImpactEnv(gym.Env):
         object_mass: float | None = None,
         task_params: dict[str, float] | None = None,
         estimator: Literal["residual", "momentum"] = "residual",
-        sensor_noise: bool = True,
-        grasp_force_n: float = 70.0,
-        model_mass_error: float = 0.0,
+        controller_preset: str | ControllerConfig = "default",
+        robot: RobotOptions | None = None,
         persist_internal_model: bool = False,
         terminate_on_success: bool = False,
         render_mode: str | None = None,
-        width: int = 320,
-        height: int = 240,
-        camera: str = "front",
-        controller_config: ControllerConfig | None = None,
-        controller_preset: str = "default",
+        render: RenderOptions | None = None,
     ) -> None:
         check_choice("controller", controller, CONTROLLERS)
         check_choice("estimator", estimator, ESTIMATORS)
-        check_choice("controller_preset", controller_preset, PRESETS)
+        if not isinstance(controller_preset, ControllerConfig):
+            check_choice("controller_preset", controller_preset, PRESETS)
+        robot, render = robot or RobotOptions(), render or RenderOptions()
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
         self.task = task = self.make_task() if task is None else _load_task(task)
@@ -113,9 +112,9 @@ class ImpactEnv(gym.Env):
         self.controller_mode = controller
         self.terminate_on_success = bool(terminate_on_success)
         self.persist_internal_model = bool(persist_internal_model)
-        noise = SensorNoise() if sensor_noise else SensorNoise.off()
-        self.sim = FrankaSim(task.scene_xml, task.object_bodies, grasp_force_n=grasp_force_n,
-                             noise=noise)
+        noise = SensorNoise() if robot.sensor_noise else SensorNoise.off()
+        self.sim = FrankaSim(task.scene_xml, task.object_bodies,
+                             grasp_force_n=robot.grasp_force_n, noise=noise)
         task.bind(self.sim)
         self._params = {p.name: p.default for p in task.params}
         if object_mass is not None:
@@ -123,17 +122,16 @@ class ImpactEnv(gym.Env):
                 object_mass)
         for name, value in (task_params or {}).items():
             self._params[name] = task.param(name).validate(value)
-        perturbation = ModelPerturbation(link_mass_scale=1.0 + float(model_mass_error))
+        perturbation = ModelPerturbation(link_mass_scale=1.0 + float(robot.model_mass_error))
         self.dynamics = PinocchioArm(perturbation=perturbation)
-        cfg, self.controller_preset = _controller_config(controller_preset, estimator,
-                                                         controller_config)
+        cfg, self.controller_preset = _controller_config(controller_preset, estimator)
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
         self.controller = ImpactController(self.dynamics, cfg, mode=controller)
         self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
                                task.before_tick if task.has_tick_hook else None)
         self._warm: ModelSnapshot | None = None
-        self._camera = camera
-        self._size = (int(height), int(width))
+        self._camera = render.camera
+        self._size = (int(render.height), int(render.width))
         self._renderer: mujoco.Renderer | None = None
         self.action_space = spaces.Box(
             low=np.concatenate([task.workspace_low, -np.ones(7)]).astype(np.float32),

@@ -60,9 +60,8 @@ class CalligraphyEnv(ImpactEnv):
     ``controller`` ("impact" | "impedance"), ``task_params={"tool_mass": kg,
     "surface_friction": μ}`` or ``reset(options=...)`` (tool_mass default 0.1, range
     0.02–5 kg, the sweep axis; surface_friction default 0.3, range 0.05–1.5), ``estimator``,
-    ``sensor_noise``, ``grasp_force_n``, ``model_mass_error``, ``persist_internal_model``,
-    ``terminate_on_success``, ``render_mode`` ("rgb_array"), ``width``, ``height``,
-    ``camera``, ``controller_preset``, ``controller_config`` (as for ``IMPACT/Hammer-v0``).
+    ``controller_preset``, ``robot``, ``persist_internal_model``, ``terminate_on_success``,
+    ``render_mode`` ("rgb_array"), ``render`` (as for ``IMPACT/Hammer-v0``).
 
     ## Version history
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
@@ -74,6 +73,11 @@ class CalligraphyEnv(ImpactEnv):
       replaces the paper-literal one (``controller_preset="paper"``). 2026-11-25: bad input
       only: an action must have shape ``(10,)`` (others were flattened) and a parameter
       value must be a real number (bools and strings were coerced).
+      2026-11-25: constructor arguments grouped (no number changes): ``sensor_noise``,
+      ``grasp_force_n`` and ``model_mass_error`` are now fields of
+      ``robot=RobotOptions(...)``, ``width``, ``height`` and ``camera`` of
+      ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
+      ``ControllerConfig`` (replacing ``controller_config``).
     """
 
     @classmethod

@@ -58,9 +58,8 @@ class DisturbanceEnv(ImpactEnv):
     ``controller`` ("impact" | "impedance"), ``task_params={"disturbance_n": N,
     "object_mass": kg, "added_mass": kg}`` or ``reset(options=...)`` (defaults 2 N, 0.3 kg,
     0.3 kg; ranges 0–40 N, 0.05–5 kg, 0–5 kg), ``object_mass`` [kg] (shortcut), ``estimator``,
-    ``sensor_noise``, ``grasp_force_n``, ``model_mass_error``, ``persist_internal_model``,
-    ``terminate_on_success``, ``render_mode`` ("rgb_array"), ``width``, ``height``,
-    ``camera``, ``controller_preset``, ``controller_config`` (as for ``IMPACT/Hammer-v0``).
+    ``controller_preset``, ``robot``, ``persist_internal_model``, ``terminate_on_success``,
+    ``render_mode`` ("rgb_array"), ``render`` (as for ``IMPACT/Hammer-v0``).
 
     ## Version history
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
@@ -68,6 +67,11 @@ class DisturbanceEnv(ImpactEnv):
       controller preset replaces the paper-literal one (``controller_preset="paper"``).
       2026-11-25: bad input only: an action must have shape ``(10,)`` (others were
       flattened) and a parameter value must be a real number (bools and strings were coerced).
+      2026-11-25: constructor arguments grouped (no number changes): ``sensor_noise``,
+      ``grasp_force_n`` and ``model_mass_error`` are now fields of
+      ``robot=RobotOptions(...)``, ``width``, ``height`` and ``camera`` of
+      ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
+      ``ControllerConfig`` (replacing ``controller_config``).
     """
 
     @classmethod

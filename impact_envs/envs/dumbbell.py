@@ -53,10 +53,9 @@ class DumbbellEnv(ImpactEnv):
     ``terminate_on_success=True``. ``SimulationError`` if the physics diverges.
 
     ## Arguments
-    As for ``IMPACT/Hammer-v0`` (``controller``, ``controller_preset``, ``controller_config``,
-    ``estimator``, ``sensor_noise``, ``grasp_force_n``, ``model_mass_error``,
-    ``persist_internal_model``, ``terminate_on_success``, ``render_mode``, ``width``,
-    ``height``, ``camera``), with ``object_mass`` [kg] defaulting to 2.5 (range 0.1–12).
+    As for ``IMPACT/Hammer-v0`` (``controller``, ``estimator``, ``controller_preset``,
+    ``robot``, ``persist_internal_model``, ``terminate_on_success``, ``render_mode``,
+    ``render``), with ``object_mass`` [kg] defaulting to 2.5 (range 0.1–12).
 
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
@@ -64,6 +63,11 @@ class DumbbellEnv(ImpactEnv):
       equal to the earlier defaults field for field) to the ``default`` preset. 2026-11-25:
       bad input only: an action must have shape ``(10,)`` (others were flattened) and a
       parameter value must be a real number (bools and strings were coerced).
+      2026-11-25: constructor arguments grouped (no number changes): ``sensor_noise``,
+      ``grasp_force_n`` and ``model_mass_error`` are now fields of
+      ``robot=RobotOptions(...)``, ``width``, ``height`` and ``camera`` of
+      ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
+      ``ControllerConfig`` (replacing ``controller_config``).
     """
 
     @classmethod

@@ -50,13 +50,14 @@ class HammerEnv(ImpactEnv):
 
     ## Arguments
     ``controller`` ("impact" | "impedance"), ``object_mass`` [kg] (default 0.2, range
-    0.05–12), ``estimator`` ("residual" | "momentum"), ``sensor_noise`` (bool),
-    ``grasp_force_n`` (default 70 N), ``model_mass_error`` (relative error of the
-    controller's link masses), ``persist_internal_model`` (keep the learned internal model
-    across resets), ``terminate_on_success``, ``render_mode`` ("rgb_array"), ``width``,
-    ``height``, ``camera`` ("front" | "side"), ``controller_preset`` ("default" | "paper",
-    docs/controller.md; reported as ``info["controller_preset"]``), ``controller_config`` (a
-    ``ControllerConfig``; overrides the preset, reported as its preset's name or "custom").
+    0.05–12), ``estimator`` ("residual" | "momentum"), ``controller_preset`` ("default" |
+    "paper", docs/controller.md, or a ``ControllerConfig``; reported as
+    ``info["controller_preset"]``, a config as its preset's name or "custom"), ``robot``
+    (``RobotOptions``: ``sensor_noise`` bool, ``grasp_force_n`` default 70 N,
+    ``model_mass_error`` relative error of the controller's link masses),
+    ``persist_internal_model`` (keep the learned internal model across resets),
+    ``terminate_on_success``, ``render_mode`` ("rgb_array"), ``render`` (``RenderOptions``:
+    ``width``, ``height``, ``camera`` "front" | "side").
 
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
@@ -64,6 +65,11 @@ class HammerEnv(ImpactEnv):
       equal to the earlier defaults field for field) to the ``default`` preset. 2026-11-25:
       bad input only: an action must have shape ``(10,)`` (others were flattened) and a
       parameter value must be a real number (bools and strings were coerced).
+      2026-11-25: constructor arguments grouped (no number changes): ``sensor_noise``,
+      ``grasp_force_n`` and ``model_mass_error`` are now fields of
+      ``robot=RobotOptions(...)``, ``width``, ``height`` and ``camera`` of
+      ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
+      ``ControllerConfig`` (replacing ``controller_config``).
     """
 
     @classmethod
