@@ -9,7 +9,8 @@ import pytest
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.robot.dynamics import PinocchioArm
 from impact_envs.robot.ik import HOME_Q, solve_ik
-from impact_envs.robot.sim import FrankaSim, SensorNoise
+from impact_envs.robot.noise import SensorNoise
+from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import BodyMass, refresh_constants
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])

@@ -25,7 +25,8 @@ from impact_envs.envs.options import RenderOptions, RobotOptions
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.loop import ClosedLoop, TickTargets
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
-from impact_envs.robot.sim import FrankaSim, SensorNoise
+from impact_envs.robot.noise import SensorNoise
+from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import ObsEntry, Task, refresh_constants
 
 POLICY_HZ = 30

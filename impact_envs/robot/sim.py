@@ -8,7 +8,6 @@ names that say so; the controller never sees it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
@@ -17,6 +16,8 @@ import numpy as np
 
 from impact_envs.errors import InvalidArgumentError, SimulationError
 from impact_envs.robot.dynamics import ARM_JOINTS, FINGER_JOINTS
+from impact_envs.robot.noise import SensorNoise
+from impact_envs.robot.scene import load_scene
 from impact_envs.robot.sim_kernels import (
     GROUP_OBJECT,
     GROUP_OTHER,
@@ -29,30 +30,6 @@ from impact_envs.robot.sim_kernels import (
     state_status,
 )
 
-ASSETS = Path(__file__).resolve().parent.parent / "assets"
-SCENE_FILE_TYPES = (".xml", ".stl", ".obj", ".msh", ".png")
-"""Files a scene outside ``assets/`` may reference by name (``load_scene``)."""
-
-
-
-def load_scene(scene_xml: str | Path) -> mujoco.MjModel:
-    """Compile a scene: a file name in the package's ``assets/``, or a path anywhere whose
-    ``<include file="fr3_hand.xml"/>`` / ``"common.xml"`` (and any other file name) resolve
-    to the scene's own directory first, then to ``assets/`` (docs/adding_a_task.md)."""
-    path = Path(scene_xml)
-    if not path.is_absolute():
-        path = ASSETS / path
-    if path.parent.resolve() == ASSETS:
-        return mujoco.MjModel.from_xml_path(str(path))
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise InvalidArgumentError(f"cannot read scene {path}: {exc}") from None
-    files = {}
-    for folder in (ASSETS, path.parent):  # the scene's own files win
-        files.update({p.name: p.read_bytes() for p in folder.iterdir()
-                      if p.is_file() and p.suffix.lower() in SCENE_FILE_TYPES})
-    return mujoco.MjModel.from_xml_string(text, assets=files)
 
 class SimArrays(NamedTuple):
     """What the closed loop's per-tick kernel reads and writes in the simulator.
@@ -88,33 +65,6 @@ def _as_slice(indices: list[int]) -> slice | np.ndarray:
     if np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
         return slice(int(idx[0]), int(idx[0]) + idx.size)
     return idx
-
-
-@dataclass(frozen=True)
-class SensorNoise:
-    """Noise of the simulated proprioception (docs/sensing.md gives the sources).
-
-    Attributes:
-        q_std_rad: white noise on joint positions [rad].
-        dq_std_rad_s: white noise on joint velocities [rad/s].
-        tau_std_nm: white noise on the joint-torque sensors [Nm].
-        tau_bias_std_nm: std of a per-episode constant torque-sensor offset [Nm].
-    """
-
-    q_std_rad: float = 1e-5
-    dq_std_rad_s: float = 1e-3
-    tau_std_nm: float = 0.05
-    tau_bias_std_nm: float = 0.02
-
-    def __post_init__(self) -> None:
-        for name in ("q_std_rad", "dq_std_rad_s", "tau_std_nm", "tau_bias_std_nm"):
-            if not getattr(self, name) >= 0.0:
-                raise InvalidArgumentError(f"SensorNoise.{name} must be >= 0")
-
-    @classmethod
-    def off(cls) -> SensorNoise:
-        """Noise-free sensing."""
-        return cls(0.0, 0.0, 0.0, 0.0)
 
 
 class FrankaSim:

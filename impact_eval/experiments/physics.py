@@ -28,7 +28,8 @@ from impact_envs.control.presets import preset_config
 from impact_envs.loop import control_tick
 from impact_envs.robot.dynamics import PinocchioArm
 from impact_envs.robot.ik import HOME_Q, solve_ik
-from impact_envs.robot.sim import FrankaSim, SensorNoise
+from impact_envs.robot.noise import SensorNoise
+from impact_envs.robot.sim import FrankaSim
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])
 
