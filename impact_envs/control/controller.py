@@ -19,7 +19,15 @@ from impact_envs.control.config import ControllerConfig
 from impact_envs.control.estimators import make_estimator
 from impact_envs.control.impedance import CartesianImpedance
 from impact_envs.control.internal_model import InternalModel
-from impact_envs.control.kernel_layout import INPUT_ABS_MAX
+from impact_envs.control.kernel_layout import (
+    APPLY_FEEDFORWARD,
+    ESTIMATOR_KIND,
+    INPUT_ABS_MAX,
+    LAMBDA_NULL_SQ,
+    LAMBDA_SQ,
+    MAPS_SHARED,
+    RUN_MODEL,
+)
 from impact_envs.control.lie import invalid_quaternion
 from impact_envs.control.limits import TorqueLimiter
 from impact_envs.control.signals import ControllerSignals
@@ -125,8 +133,10 @@ class ImpactController:
         par, self.signals.wrench_cmd_world, _, self._scalars = views[:4]
         self.signals.wrench_ff_world = views[4]
         run_model = self.mode == "impact"
-        par[:] = (lam * lam, lam_n * lam_n, float(lam_n == lam), self.estimator.kernel_kind,
-                  float(run_model), float(run_model))
+        par[LAMBDA_SQ], par[LAMBDA_NULL_SQ] = lam * lam, lam_n * lam_n
+        par[MAPS_SHARED] = float(lam_n == lam)
+        par[ESTIMATOR_KIND] = self.estimator.kernel_kind
+        par[RUN_MODEL] = par[APPLY_FEEDFORWARD] = float(run_model)
         self._grams = np.zeros((2, 6, 6))
         self.wrench_maps = np.zeros((2, 6, 7))  # estimator's (J J^T + l^2 I)^-1 J, projector's
         self._zeros6, self._zeros7 = np.zeros(6), np.zeros(7)

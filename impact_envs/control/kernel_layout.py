@@ -180,6 +180,19 @@ def model32_views(buf32, n_features):
 
 CONTROLLER_SIZE = 30
 """Length of ImpactController's own buffer."""
+# Slots of the controller buffer's ``par`` (``controller_views``), by name.
+LAMBDA_SQ = 0
+"""Estimator regularization lambda^2 [m^2]."""
+LAMBDA_NULL_SQ = 1
+"""Null-space projector regularization lambda_n^2 [m^2]."""
+MAPS_SHARED = 2
+"""1 when both use the same lambda (one solve serves both), else 0."""
+ESTIMATOR_KIND = 3
+"""0 residual estimator, 1 momentum observer."""
+RUN_MODEL = 4
+"""1 runs the internal model (mode "impact"), 0 skips it (mode "impedance")."""
+APPLY_FEEDFORWARD = 5
+"""1 applies the prediction as feedforward, 0 does not."""
 
 
 @njit(cache=True)

@@ -27,14 +27,20 @@ import numpy as np
 from numba import njit
 
 from impact_envs.control.kernel_layout import (
+    APPLY_FEEDFORWARD,
     BAD_INPUT,
     BAD_QUAT,
     CONTROLLER_SIZE,
     DQ_ABS_MAX,
+    ESTIMATOR_KIND,
+    LAMBDA_NULL_SQ,
+    LAMBDA_SQ,
+    MAPS_SHARED,
     NON_FINITE,
     POS_ABS_MAX,
     Q_ABS_MAX,
     QUAT_ABS_MAX,
+    RUN_MODEL,
     SLOW_FILTER_SIZE,
     STORE,
     TAU_ABS_MAX,
@@ -161,39 +167,49 @@ def controller_tick(
         return BAD_INPUT
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
-    regularized_wrench_map(dyn.jacobian, par[0], grams[0], wrench_maps[0])
-    if par[2] == 0.0:
-        regularized_wrench_map(dyn.jacobian, par[1], grams[1], wrench_maps[1])
-    if par[3] == 0.0:
+    shared = par[MAPS_SHARED] != 0.0
+    regularized_wrench_map(dyn.jacobian, par[LAMBDA_SQ], grams[0], wrench_maps[0])
+    if not shared:
+        regularized_wrench_map(dyn.jacobian, par[LAMBDA_NULL_SQ], grams[1], wrench_maps[1])
+    if par[ESTIMATOR_KIND] == 0.0:
         residual_update(dq, tau_meas, fric, dyn, wrench_maps[0], est)
     else:
         momentum_update(dq, tau_meas, fric, dyn, wrench_maps[0], est)
     wrench_ext = est[est.shape[0] - 6:]  # both estimator layouts end with the wrench
     slow_rate = slow_filter_update(wrench_ext, sf)
     flags = 0
+    run_model = par[RUN_MODEL] != 0.0
     pred = model_views(model)[3]
-    if par[4] != 0.0:
+    if run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
         model_predict(model32, weights, biases, model)
         flags = model_gate_step(slow_filter_views(sf)[4], slow_rate, mask, model)
     for i in range(6):
         sig_cmd[i] = wrench_cmd[i]
-        if par[5] == 0.0:
+        if par[APPLY_FEEDFORWARD] == 0.0:
             w_ff[i] = 0.0
         elif mask[i] != 0.0:
             w_ff[i] = pred[i]
         # else: a masked axis keeps the feedforward of its last unmasked tick (its prediction
         # follows input features that the commanded contact changes: positive feedback)
         w_extra[i] = w_ff[i] + wrench_cmd[i]
-    wrench_map_null = wrench_maps[0] if par[2] != 0.0 else wrench_maps[1]
+    wrench_map_null = wrench_maps[0] if shared else wrench_maps[1]
     impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, w_extra, imp)
-    views = impedance_views(imp)
-    torque_limiter(views[10], views[9], lim)
-    _fill_scalars(views[2], slow_rate, model, par[4] != 0.0, scalars)
+    pose_error, tau_gravity, tau_no_gravity = _impedance_outputs(imp)
+    torque_limiter(tau_no_gravity, tau_gravity, lim)
+    _fill_scalars(pose_error, slow_rate, model, run_model, scalars)
     for v in limiter_views(lim)[3]:
         if not math.isfinite(v):
             flags |= NON_FINITE
     return flags
+
+
+@njit(cache=True)
+def _impedance_outputs(imp):
+    """(pose error, gravity torque, torque without gravity) of an impedance buffer."""
+    (_par, _k_q_null, pose_error, _twist, _w_imp, _tau0, _w_null, _w, _tau_cor, tau_gravity,
+     tau_no_gravity) = impedance_views(imp)
+    return pose_error, tau_gravity, tau_no_gravity
 
 
 @njit(cache=True)
