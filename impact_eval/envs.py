@@ -165,3 +165,15 @@ def probe_values(env: gym.Env, param_name: str, values: Sequence[float]) -> None
                 f"env ignored {param_name}={value} (info reports {reported}); "
                 "does it read reset(options=...)?"
             )
+
+
+def warm_kernels(env: gym.Env) -> None:
+    """Run one policy step so that every per-tick numba kernel is compiled (or loaded) in
+    this process before any sweep worker starts: numba caches them on disk, so the workers
+    of a sweep on a fresh machine load them (about 1.5 s each) instead of each compiling
+    them (about 18 s each, docs/eval.md). A plugin env's failure here is left to the sweep."""
+    try:
+        env.reset(seed=0)
+        env.step(env.action_space.sample())
+    except Exception:  # noqa: BLE001, S110 - only a warm-up: the sweep reports real failures
+        pass

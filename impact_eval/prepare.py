@@ -22,6 +22,7 @@ from impact_eval.envs import (
     describe_env,
     make_env,
     probe_values,
+    warm_kernels,
 )
 from impact_eval.grid import episode_seed, format_value, parse_grid
 from impact_eval.methods import MethodSpec, resolve_method
@@ -140,6 +141,8 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
         info = describe_env(first, req.param)
         check_param(info, req.param)
         probe_values(first, info.param_name, values)
+        for env in envs.values():
+            warm_kernels(env)
         return info
     finally:
         for env in envs.values():
