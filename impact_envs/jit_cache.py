@@ -24,10 +24,14 @@ from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 KERNEL_SOURCES = (
+    "control/estimators.py",
+    "control/impedance.py",
+    "control/internal_model/kernels.py",
     "control/kernel_layout.py",
     "control/kernel_math.py",
-    "control/kernel_stages.py",
     "control/kernels.py",
+    "control/limits.py",
+    "control/slow_filter.py",
     "loop/tick.py",
     "robot/chain_dynamics.py",
     "robot/sim_kernels.py",

@@ -16,9 +16,9 @@ from impact_envs.control.internal_model import (
     FEATURE_SCALE,
     InternalModel,
 )
-from impact_envs.control.internal_model_net import sgd_step
+from impact_envs.control.internal_model.gate import SurpriseGate
+from impact_envs.control.internal_model.net import sgd_step
 from impact_envs.control.presets import preset_config
-from impact_envs.control.surprise_gate import SurpriseGate
 from impact_envs.errors import CheckpointError, InvalidArgumentError
 
 torch.set_num_threads(1)

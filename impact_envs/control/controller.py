@@ -21,12 +21,14 @@ from impact_envs.control.impedance import CartesianImpedance
 from impact_envs.control.internal_model import InternalModel
 from impact_envs.control.kernel_layout import (
     APPLY_FEEDFORWARD,
+    CONTROLLER_SIZE,
     ESTIMATOR_KIND,
     INPUT_ABS_MAX,
     LAMBDA_NULL_SQ,
     LAMBDA_SQ,
     MAPS_SHARED,
     RUN_MODEL,
+    controller_views,
 )
 from impact_envs.control.lie import invalid_quaternion
 from impact_envs.control.limits import TorqueLimiter
@@ -128,8 +130,8 @@ class ImpactController:
         """Controller buffer (``kernels.controller_views``) and the wrench-map solves."""
         cfg = self.config
         lam, lam_n = cfg.estimator.regularization, cfg.impedance.nullspace_pinv_damping
-        self.buffer = np.zeros(kernels.CONTROLLER_SIZE)
-        views = kernels.controller_views(self.buffer)
+        self.buffer = np.zeros(CONTROLLER_SIZE)
+        views = controller_views(self.buffer)
         par, self.signals.wrench_cmd_world, _, self._scalars = views[:4]
         self.signals.wrench_ff_world = views[4]
         run_model = self.mode == "impact"

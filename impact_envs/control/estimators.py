@@ -10,14 +10,137 @@ regularized least squares w_hat = (J J^T + lambda^2 I)^-1 J tau_res.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+from numba import njit
 
-from impact_envs.control import kernels
 from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
-from impact_envs.control.config import EstimatorConfig
 from impact_envs.control.jacobian import regularized_wrench_map
+from impact_envs.control.kernel_layout import _next
+from impact_envs.control.kernel_math import mat_t_vec, mat_vec
+from impact_envs.control.validation import check_positive
+from impact_envs.errors import check_choice
+
+ESTIMATOR_KINDS = ("residual", "momentum")
+"""Valid values of ``EstimatorConfig.kind``."""
+
+
+@dataclass(frozen=True)
+class EstimatorConfig:
+    """External-wrench estimator.
+
+    Attributes:
+        kind: ``"residual"`` (paper: tau_meas - tau_model with a filtered acceleration) or
+            ``"momentum"`` (generalized-momentum observer, De Luca / Haddadin).
+        regularization: lambda of the regularized least squares w = (J J^T + lambda^2 I)^-1 J r
+            [units of J] (paper: 0.02).
+        momentum_gain_per_s: Observer gain K_O [1/s]; the residual is a first-order low-pass of
+            the external joint torque with time constant 1/K_O (own choice: 50, i.e. 20 ms).
+        lowpass_time_constant_s: Time constant of the first-order low-pass applied to the
+            finite-difference acceleration and, identically, to the torque residual [s]
+            (paper: 0.0495).
+        include_joint_friction: Add ``dynamics.joint_friction(dq)`` to the model torque. Turn off
+            when ``tau_measured`` is already link-side (friction subtracted by the sensor).
+    """
+
+    kind: str = "residual"
+    regularization: float = 0.02
+    momentum_gain_per_s: float = 50.0
+    lowpass_time_constant_s: float = 0.0495
+    include_joint_friction: bool = True
+
+    def __post_init__(self) -> None:
+        check_choice("estimator kind", self.kind, ESTIMATOR_KINDS)
+        check_positive("regularization", self.regularization)
+        check_positive("momentum_gain_per_s", self.momentum_gain_per_s)
+        check_positive("lowpass_time_constant_s", self.lowpass_time_constant_s)
+
+
+# ---------------------------------------------------------------- buffer layout and kernel
+def residual_size(n: int) -> int:
+    """Length of a residual-estimator buffer for ``n`` joints."""
+    return 8 + 8 * n
+
+
+@njit(cache=True)
+def residual_views(buf):
+    """(par [a, started], lp [ddq_hat; tau_lp], raw, gain, dq_prev, tau_res, wrench)."""
+    n = (buf.shape[0] - 8) // 8
+    par, o = _next(buf, 0, 2)
+    lp, o = _next(buf, o, 2 * n)
+    raw, o = _next(buf, o, 2 * n)
+    gain, o = _next(buf, o, 2 * n)
+    dq_prev, o = _next(buf, o, n)
+    tau_res, o = _next(buf, o, n)
+    wrench, o = _next(buf, o, 6)
+    return par, lp, raw, gain, dq_prev, tau_res, wrench
+
+
+def momentum_size(n: int) -> int:
+    """Length of a momentum-observer buffer for ``n`` joints."""
+    return 9 + 5 * n
+
+
+@njit(cache=True)
+def momentum_views(buf):
+    """(par [K_O, dt, started], r, p0, integral, p, tau_res, wrench)."""
+    n = (buf.shape[0] - 9) // 5
+    par, o = _next(buf, 0, 3)
+    r, o = _next(buf, o, n)
+    p0, o = _next(buf, o, n)
+    integral, o = _next(buf, o, n)
+    p, o = _next(buf, o, n)
+    tau_res, o = _next(buf, o, n)
+    wrench, o = _next(buf, o, 6)
+    return par, r, p0, integral, p, tau_res, wrench
+
+
+@njit(cache=True)
+def residual_update(dq, tau_meas, fric, dyn, wrench_map, buf) -> None:
+    """Residual estimator tick (estimators.py::ResidualEstimator); fric = 0 when not modelled."""
+    _, mass, cor, grav, _, _ = dyn
+    par, lp, raw, gain, dq_prev, tau_res, wrench = residual_views(buf)
+    n = dq.shape[0]
+    alpha = par[0]
+    for j in range(n):
+        raw[j] = dq[j] - dq_prev[j] if par[1] != 0.0 else 0.0
+        dq_prev[j] = dq[j]
+    par[1] = 1.0
+    mat_vec(cor, dq, tau_res)  # scratch: C dq
+    for j in range(n):
+        raw[n + j] = tau_meas[j] - grav[j] - tau_res[j] - fric[j]
+    for j in range(2 * n):  # lp <- (1 - a) lp + a raw, the 1/dt of the difference in the gain
+        lp[j] = lp[j] * (1.0 - alpha) + raw[j] * gain[j]
+    mat_vec(mass, lp[:n], tau_res)
+    for j in range(n):
+        tau_res[j] = lp[n + j] - tau_res[j]
+    mat_vec(wrench_map, tau_res, wrench)
+
+
+@njit(cache=True)
+def momentum_update(dq, tau_meas, fric, dyn, wrench_map, buf) -> None:
+    """Momentum observer tick (estimators.py::MomentumObserver); fric = 0 when not modelled."""
+    _, mass, cor, grav, _, _ = dyn
+    par, r, p0, integral, p, tau_res, wrench = momentum_views(buf)
+    gain, dt = par[0], par[1]
+    n = dq.shape[0]
+    mat_vec(mass, dq, p)
+    if par[2] == 0.0:
+        for j in range(n):
+            p0[j] = p[j]
+        par[2] = 1.0
+    else:
+        mat_t_vec(cor, dq, tau_res)  # scratch: C^T dq
+        for j in range(n):
+            beta = (tau_res[j] - grav[j] - fric[j] + tau_meas[j] + r[j]) * dt
+            integral[j] += beta
+            r[j] = (p[j] - p0[j] - integral[j]) * gain
+    for j in range(n):
+        tau_res[j] = -r[j]
+    mat_vec(wrench_map, tau_res, wrench)
+
 
 RESIDUAL, MOMENTUM = 0, 1
 """``kernel_kind`` of the two estimators (selects the kernel in ``kernels.controller_tick``)."""
@@ -63,8 +186,8 @@ def _run_kernel(
         fric = np.zeros_like(dq)
     if wrench_map is None:
         wrench_map = regularized_wrench_map(dynamics.jacobian, cfg.regularization)
-    kernel = kernels.residual_update if estimator.kernel_kind == RESIDUAL else (
-        kernels.momentum_update
+    kernel = residual_update if estimator.kernel_kind == RESIDUAL else (
+        momentum_update
     )
     kernel(dq, np.asarray(tau_meas, dtype=np.float64), fric, dynamics_arrays(dynamics),
            np.asarray(wrench_map, dtype=np.float64), estimator.buffer)
@@ -81,7 +204,7 @@ class ResidualEstimator:
     tau_res = LP(tau_meas - C dq - g - tau_fric) - M LP(ddq_fd) ~ LP(tau_meas - tau_model)
     (exact while M varies slowly compared with T). Both filter states start at 0 after
     ``reset``, so the estimate rises from 0 with time constant T instead of spiking. The tick
-    is ``kernels.residual_update``; the arrays are views of ``buffer`` (``residual_views``).
+    is ``residual_update``; the arrays are views of ``buffer`` (``residual_views``).
 
     Attributes:
         ddq_hat: Filtered joint acceleration (7,) [rad/s^2].
@@ -97,10 +220,10 @@ class ResidualEstimator:
         self.dt_s = dt_s
         self.alpha = 1.0 - math.exp(-dt_s / config.lowpass_time_constant_s)
         n = n_joints
-        self.buffer = np.zeros(kernels.residual_size(n))
+        self.buffer = np.zeros(residual_size(n))
         # Both filters run on one stacked vector [ddq (n); tau_meas - C dq - g - tau_fric (n)].
         (self._par, self._lp, _, gain, _, self.tau_residual, self.wrench_world) = (
-            kernels.residual_views(self.buffer)
+            residual_views(self.buffer)
         )
         self._par[0] = self.alpha
         gain[:n], gain[n:] = self.alpha / dt_s, self.alpha
@@ -140,7 +263,7 @@ class MomentumObserver:
     + r_{k-1}). Then r -> tau_ext (on the robot) with per-tick dynamics
     r_k = r_{k-1} + K_O dt (tau_ext - r_{k-1}), i.e. a first-order low-pass with time constant
     1 / K_O. No acceleration, no M^-1. tau_res = -r gives the libfranka sign. The tick is
-    ``kernels.momentum_update``; the arrays are views of ``buffer`` (``momentum_views``).
+    ``momentum_update``; the arrays are views of ``buffer`` (``momentum_views``).
 
     Attributes:
         r: Observer residual (estimate of tau_ext ON the robot) (7,) [Nm].
@@ -155,9 +278,9 @@ class MomentumObserver:
         self.config = config
         self.dt_s = dt_s
         self.gain = config.momentum_gain_per_s
-        self.buffer = np.zeros(kernels.momentum_size(n_joints))
+        self.buffer = np.zeros(momentum_size(n_joints))
         (self._par, self.r, _, self._sum, _, self.tau_residual, self.wrench_world) = (
-            kernels.momentum_views(self.buffer)
+            momentum_views(self.buffer)
         )
         self._par[:2] = self.gain, dt_s
 

@@ -14,19 +14,144 @@ libfranka.
 
 from __future__ import annotations
 
-import numpy as np
+import math
+from dataclasses import dataclass
 
-from impact_envs.control import kernels
+import numpy as np
+from numba import njit
+
 from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
-from impact_envs.control.config import ImpedanceConfig
+from impact_envs.control.kernel_layout import _next
+from impact_envs.control.kernel_math import mat_t_vec, mat_vec, orientation_error
 from impact_envs.control.lie import invalid_quaternion
+from impact_envs.control.validation import check_len, check_positive
+
+
+@dataclass(frozen=True)
+class ImpedanceConfig:
+    """Task-space impedance, null-space posture and model compensation terms.
+
+    Attributes:
+        stiffness_translational_n_per_m: Diagonal of K for position error [N/m] (paper: 400).
+        stiffness_rotational_nm_per_rad: Diagonal of K for orientation error [Nm/rad] (paper: 30).
+        damping_translational_ns_per_m: Diagonal of D for TCP linear velocity [N s/m] (paper: 40).
+        damping_rotational_nms_per_rad: Diagonal of D for TCP angular velocity [Nm s/rad]
+            (paper: 10.95 = 2 sqrt(30)).
+        nullspace_stiffness_nm_per_rad: Joint stiffness k_n toward the posture q_null that
+            ``reset`` records [Nm/rad] (own choice: 10).
+        nullspace_damping_nms_per_rad: Joint damping d_n of the posture task [Nm s/rad];
+            ``None`` means 2 sqrt(k_n) (Franka example convention).
+        nullspace_pinv_damping: Damping of the pseudo-inverse in N = I - J^T (J^+)^T
+            [units of J]. Equal to the estimator's lambda by default so one regularized solve
+            per tick serves both.
+        compensate_gravity: Add g(q) of the controller model (the simulation has none built in).
+        compensate_coriolis: Add C(q, dq) dq (as the Franka example does).
+    """
+
+    stiffness_translational_n_per_m: tuple[float, float, float] = (400.0, 400.0, 400.0)
+    stiffness_rotational_nm_per_rad: tuple[float, float, float] = (30.0, 30.0, 30.0)
+    damping_translational_ns_per_m: tuple[float, float, float] = (40.0, 40.0, 40.0)
+    damping_rotational_nms_per_rad: tuple[float, float, float] = (10.95, 10.95, 10.95)
+    nullspace_stiffness_nm_per_rad: float = 10.0
+    nullspace_damping_nms_per_rad: float | None = None
+    nullspace_pinv_damping: float = 0.02
+    compensate_gravity: bool = True
+    compensate_coriolis: bool = True
+
+    def __post_init__(self) -> None:
+        for name in (
+            "stiffness_translational_n_per_m",
+            "stiffness_rotational_nm_per_rad",
+            "damping_translational_ns_per_m",
+            "damping_rotational_nms_per_rad",
+        ):
+            values = tuple(float(v) for v in getattr(self, name))
+            check_len(name, values, 3)
+            check_positive(name, values, allow_zero=True)
+            object.__setattr__(self, name, values)
+        k_n, d_n = self.nullspace_stiffness_nm_per_rad, self.nullspace_damping_nms_per_rad
+        check_positive("nullspace_stiffness_nm_per_rad", k_n, allow_zero=True)
+        if d_n is not None:
+            check_positive("nullspace_damping_nms_per_rad", d_n, allow_zero=True)
+        check_positive("nullspace_pinv_damping", self.nullspace_pinv_damping)
+
+    @property
+    def nullspace_damping(self) -> float:
+        """Resolved null-space damping d_n [Nm s/rad] (2 sqrt(k_n) when unset)."""
+        if self.nullspace_damping_nms_per_rad is None:
+            return 2.0 * math.sqrt(self.nullspace_stiffness_nm_per_rad)
+        return self.nullspace_damping_nms_per_rad
+
+
+# ---------------------------------------------------------------- buffer layout and kernel
+def impedance_size(n: int) -> int:
+    """Length of an impedance buffer for ``n`` joints (see ``impedance_views``)."""
+    return 46 + 5 * n
+
+
+@njit(cache=True)
+def impedance_views(buf):
+    """(par, k_q_null, e, twist, w_imp, tau0, w_null, w, tau_coriolis, tau_gravity, out).
+
+    par = [K (6), D (6), k_n, d_n, gravity on, Coriolis on]; e = pose error; out = torque
+    without gravity.
+    """
+    n = (buf.shape[0] - 46) // 5
+    par, o = _next(buf, 0, 16)
+    k_q_null, o = _next(buf, o, n)
+    e, o = _next(buf, o, 6)
+    twist, o = _next(buf, o, 6)
+    w_imp, o = _next(buf, o, 6)
+    tau0, o = _next(buf, o, n)
+    w_null, o = _next(buf, o, 6)
+    w, o = _next(buf, o, 6)
+    tau_cor, o = _next(buf, o, n)
+    tau_grav, o = _next(buf, o, n)
+    out, o = _next(buf, o, n)
+    return par, k_q_null, e, twist, w_imp, tau0, w_null, w, tau_cor, tau_grav, out
+
+
+@njit(cache=True)
+def impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map, wrench_ff, buf) -> bool:
+    """tau_no_gravity = J^T (K e - D J dq - W_n tau_0 + w_ff) + tau_0 + C dq (impedance.py).
+
+    dyn = (J, M, C, g, p_ee, R_ee); buf = impedance buffer. Returns False (nothing written) when
+    the target quaternion is invalid.
+    """
+    jac, _, cor, grav, pos_ee, rot_ee = dyn
+    par, k_q_null, e, twist, w_imp, tau0, w_null, w, tau_cor, tau_grav, out = (
+        impedance_views(buf)
+    )
+    if not orientation_error(quat_target, rot_ee, e[3:]):
+        return False
+    for i in range(3):
+        e[i] = pos_target[i] - pos_ee[i]
+    mat_vec(jac, dq, twist)
+    for i in range(6):
+        w_imp[i] = par[i] * e[i] - par[6 + i] * twist[i]
+    k_null, d_null = par[12], par[13]
+    for j in range(tau0.shape[0]):
+        tau0[j] = q[j] * -k_null + k_q_null[j] - dq[j] * d_null
+    mat_vec(wrench_map, tau0, w_null)
+    for i in range(6):
+        w[i] = w_imp[i] - w_null[i] + wrench_ff[i]
+    mat_t_vec(jac, w, out)
+    if par[15] != 0.0:
+        mat_vec(cor, dq, tau_cor)
+    for j in range(out.shape[0]):
+        out[j] += tau0[j]
+        if par[15] != 0.0:
+            out[j] += tau_cor[j]
+        if par[14] != 0.0:
+            tau_grav[j] = grav[j]
+    return True
 
 
 class CartesianImpedance:
     """Preallocated impedance law; all outputs are attributes overwritten every ``compute``.
 
-    The law itself is ``kernels.impedance_law`` (also run by ``kernels.controller_tick``); the
-    array attributes are views of ``buffer`` (layout: ``kernels.impedance_views``).
+    The law itself is ``impedance_law`` (also run by ``kernels.controller_tick``); the
+    array attributes are views of ``buffer`` (layout: ``impedance_views``).
 
     Attributes:
         pose_error: e = [p_d - p (3) [m]; Log(R_d R^T) (3) [rad]], world frame.
@@ -45,10 +170,10 @@ class CartesianImpedance:
         self.config = config
         self.k_null = config.nullspace_stiffness_nm_per_rad
         self.d_null = config.nullspace_damping
-        self.buffer = np.zeros(kernels.impedance_size(n_joints))
+        self.buffer = np.zeros(impedance_size(n_joints))
         (par, self._k_q_null, self.pose_error, self.twist_world, self.wrench_imp_world,
          self.tau_posture, self.wrench_null_world, self._w, self.tau_coriolis, self.tau_gravity,
-         self.tau_no_gravity) = kernels.impedance_views(self.buffer)  # fmt: skip
+         self.tau_no_gravity) = impedance_views(self.buffer)  # fmt: skip
         par[:] = (
             config.stiffness_translational_n_per_m
             + config.stiffness_rotational_nm_per_rad
@@ -76,7 +201,7 @@ class CartesianImpedance:
         """Fill and return ``pose_error`` = [p_d - p; Log(R_d R^T)] (6,) [m, rad]."""
         quat = np.ascontiguousarray(quat_target_world, dtype=np.float64)
         rot = np.ascontiguousarray(rot_ee_world, dtype=np.float64)
-        if not kernels.orientation_error(quat, rot, self.pose_error[3:]):
+        if not orientation_error(quat, rot, self.pose_error[3:]):
             raise invalid_quaternion(quat_target_world)
         np.subtract(pos_target_world, pos_ee_world, out=self.pose_error[:3])
         return self.pose_error
@@ -110,7 +235,7 @@ class CartesianImpedance:
         """
         f64 = np.float64
         w_ff = self._zeros6 if wrench_ff_world is None else np.asarray(wrench_ff_world, f64)
-        ok = kernels.impedance_law(
+        ok = impedance_law(
             dynamics_arrays(dynamics), np.asarray(q, f64), np.asarray(dq, f64),
             np.asarray(pos_target_world, f64), np.asarray(quat_target_world, f64),
             np.asarray(wrench_map, f64), w_ff, self.buffer,

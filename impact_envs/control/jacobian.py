@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.control import kernels
+from impact_envs.control import kernel_math
 
 
 def regularized_wrench_map(
@@ -29,7 +29,7 @@ def regularized_wrench_map(
     if out is None:
         out = np.empty_like(jac)
     gram = np.empty((jac.shape[0], jac.shape[0]))
-    kernels.regularized_wrench_map(jac, float(damping) * float(damping), gram, out)
+    kernel_math.regularized_wrench_map(jac, float(damping) * float(damping), gram, out)
     return out
 
 
@@ -50,5 +50,5 @@ class RegularizedWrenchMap:
     def update(self, jacobian: np.ndarray) -> np.ndarray:
         """Recompute and return ``matrix`` for ``jacobian`` (6, n_joints)."""
         jac = np.ascontiguousarray(jacobian, dtype=np.float64)
-        kernels.regularized_wrench_map(jac, self.damping_sq, self.gram, self.matrix)
+        kernel_math.regularized_wrench_map(jac, self.damping_sq, self.gram, self.matrix)
         return self.matrix

@@ -1,21 +1,17 @@
-"""Numba kernels: the per-tick math of every controller stage, chained in one call.
+"""The controller's per-tick kernel: every stage chained in one numba call.
 
-Each stage class (``impedance.py``, ``estimators.py``, ``slow_filter.py``, ``limits.py``,
-``jacobian.py``, ``internal_model.py``) keeps its parameters and state in one preallocated
-float64 buffer and calls the kernel of its own stage; ``ImpactController.compute`` calls
-:func:`controller_tick`, which runs all stages after the dynamics update in one call through the
-same functions. There is no second (NumPy) copy of this math.
+Each stage module (``impedance.py``, ``estimators.py``, ``slow_filter.py``, ``limits.py``,
+``internal_model/``) holds its config, the layout of its float64 state buffer (its
+``*_views`` function: the only definition of that layout, giving named views) and its
+``@njit`` step; its class keeps the buffer and calls that step. ``controller_tick`` runs the
+steps of all stages on a ``ControllerState`` (the stages' buffers, by name);
+``ImpactController.compute`` and the closed loop (``impact_envs/loop``) call it. There is no
+second (NumPy) copy of this math. Shared pieces: ``kernel_layout.py`` (status bits, input
+bounds, the controller's own buffer), ``kernel_math.py`` (linear algebra, SO(3)).
 
-Modules: ``kernel_layout.py`` (buffer layouts, status bits), ``kernel_math.py`` (linear
-algebra, SO(3)), ``kernel_stages.py`` (the stages); this module chains them and re-exports the
-names the rest of the package uses as ``kernels.<name>``.
-
-Buffers: the ``*_views`` functions are the only definition of each buffer's layout; the
-classes call them once to get named NumPy views, the kernels call them every tick (slicing is
-free in compiled code). One array per stage keeps the call cheap: numba's dispatcher costs
-~0.06 us per array argument. Everything is float64 except the internal model's history and
-weights (float32, the weights shared with torch); its first dense layer accumulates in float32
-(like the float32 BLAS path it replaced), the later ones in float64.
+Everything is float64 except the internal model's history and weights (float32, the weights
+shared with torch); its first dense layer accumulates in float32 (like the float32 BLAS path
+it replaced), the later ones in float64.
 """
 
 from __future__ import annotations
@@ -26,11 +22,18 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from impact_envs.control.estimators import momentum_update, residual_update
+from impact_envs.control.impedance import impedance_law, impedance_views
+from impact_envs.control.internal_model.kernels import (
+    model_gate_step,
+    model_predict,
+    model_views,
+    push_features,
+)
 from impact_envs.control.kernel_layout import (
     APPLY_FEEDFORWARD,
     BAD_INPUT,
     BAD_QUAT,
-    CONTROLLER_SIZE,
     DQ_ABS_MAX,
     ESTIMATOR_KIND,
     LAMBDA_NULL_SQ,
@@ -41,60 +44,20 @@ from impact_envs.control.kernel_layout import (
     Q_ABS_MAX,
     QUAT_ABS_MAX,
     RUN_MODEL,
-    SLOW_FILTER_SIZE,
     STORE,
     TAU_ABS_MAX,
     TRAIN,
     WIDTH_ABS_MAX,
     WRENCH_ABS_MAX,
     controller_views,
-    impedance_size,
-    impedance_views,
-    limiter_size,
-    limiter_views,
-    model32_size,
-    model32_views,
-    model_size,
-    model_views,
-    momentum_size,
-    momentum_views,
-    residual_size,
-    residual_views,
-    slow_filter_views,
 )
-from impact_envs.control.kernel_math import (
-    matrix_to_quat,
-    orientation_error,
-    quat_log,
-    quat_normalized,
-    regularized_wrench_map,
-)
-from impact_envs.control.kernel_stages import (
-    gate_update,
-    impedance_law,
-    limit_rate,
-    mlp_forward,
-    model_gate_step,
-    model_predict,
-    momentum_update,
-    push_features,
-    residual_update,
-    saturate,
-    slow_filter_update,
-    torque_limiter,
-)
+from impact_envs.control.kernel_math import quat_normalized, regularized_wrench_map
+from impact_envs.control.limits import limiter_views, torque_limiter
+from impact_envs.control.slow_filter import slow_filter_update, slow_filter_views
 
 __all__ = [
-    "BAD_INPUT", "BAD_QUAT", "CONTROLLER_SIZE", "NON_FINITE", "SLOW_FILTER_SIZE", "STORE",
-    "TRAIN",
-    "ControllerState", "controller_tick", "controller_views", "first_bad_input",
-    "gate_update",
-    "impedance_law", "impedance_size", "impedance_views", "limit_rate", "limiter_size",
-    "limiter_views", "matrix_to_quat", "mlp_forward", "model32_size", "model32_views",
-    "model_gate_step", "model_predict", "model_size", "model_views", "momentum_size",
-    "momentum_update", "momentum_views", "orientation_error", "push_features", "quat_log",
-    "quat_normalized", "regularized_wrench_map", "residual_size", "residual_update",
-    "residual_views", "saturate", "slow_filter_update", "slow_filter_views", "torque_limiter",
+    "BAD_INPUT", "BAD_QUAT", "NON_FINITE", "STORE", "TRAIN", "ControllerState",
+    "controller_tick", "first_bad_input", "limiter_views",
 ]
 
 

@@ -54,9 +54,9 @@ def quat_to_matrix(quat: np.ndarray, out: np.ndarray | None = None) -> np.ndarra
 
 def _matrix_to_quat_tuple(rot: np.ndarray) -> tuple[float, float, float, float]:
     """Shepperd's method (``kernels.matrix_to_quat``); returns (w, x, y, z) with w >= 0."""
-    from impact_envs.control import kernels
+    from impact_envs.control.kernel_math import matrix_to_quat
 
-    return kernels.matrix_to_quat(np.ascontiguousarray(rot, dtype=np.float64))
+    return matrix_to_quat(np.ascontiguousarray(rot, dtype=np.float64))
 
 
 def matrix_to_quat(rot: np.ndarray) -> np.ndarray:
@@ -85,9 +85,9 @@ def quat_conjugate(quat: np.ndarray) -> np.ndarray:
 
 def _quat_log_tuple(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:
     """Rotation vector of a unit quaternion with w >= 0 (angle in [0, pi], ``kernels.quat_log``)."""
-    from impact_envs.control import kernels
+    from impact_envs.control.kernel_math import quat_log
 
-    return kernels.quat_log(float(w), float(x), float(y), float(z))
+    return quat_log(float(w), float(x), float(y), float(z))
 
 
 def quat_to_rotvec(quat: np.ndarray) -> np.ndarray:
@@ -150,11 +150,11 @@ def orientation_error(
     Raises:
         InvalidArgumentError: If ``quat_target`` is zero or not finite.
     """
-    from impact_envs.control import kernels
+    from impact_envs.control.kernel_math import orientation_error as kernel_orientation_error
 
     res = np.empty(3)
     quat = np.ascontiguousarray(quat_target, dtype=np.float64)
-    if not kernels.orientation_error(quat, np.ascontiguousarray(rot, dtype=np.float64), res):
+    if not kernel_orientation_error(quat, np.ascontiguousarray(rot, dtype=np.float64), res):
         raise invalid_quaternion(quat_target)
     if out is None:
         return res

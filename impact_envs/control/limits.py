@@ -2,10 +2,98 @@
 
 from __future__ import annotations
 
-import numpy as np
+from dataclasses import dataclass
 
-from impact_envs.control import kernels
-from impact_envs.control.config import LimitsConfig
+import numpy as np
+from numba import njit
+
+from impact_envs.control.kernel_layout import _next
+from impact_envs.control.validation import check_len, check_positive
+
+
+@dataclass(frozen=True)
+class LimitsConfig:
+    """Torque saturation and torque-rate limits (FR3 / libfranka).
+
+    Attributes:
+        torque_max_nm: Symmetric per-joint torque bound [Nm] (FR3: 87 x4, 12 x3).
+        torque_rate_max_nm_per_s: Bound on |d tau / dt| [Nm/s] (libfranka: 1000, i.e. 1 Nm/tick).
+    """
+
+    torque_max_nm: tuple[float, ...] = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
+    torque_rate_max_nm_per_s: float = 1000.0
+
+    def __post_init__(self) -> None:
+        values = tuple(float(v) for v in self.torque_max_nm)
+        check_len("torque_max_nm", values, 7)
+        check_positive("torque_max_nm", values)
+        object.__setattr__(self, "torque_max_nm", values)
+        check_positive("torque_rate_max_nm_per_s", self.torque_rate_max_nm_per_s)
+
+
+def beyond_hardware_limits(limits: LimitsConfig) -> list[str]:
+    """The settings of ``limits`` above the FR3's hardware limits (empty when within)."""
+    fr3 = LimitsConfig()
+    above = [f"limits.torque_max_nm[{i}]={v:g} > {hw:g} Nm"
+             for i, (v, hw) in enumerate(zip(limits.torque_max_nm, fr3.torque_max_nm,
+                                             strict=True)) if v > hw]
+    if limits.torque_rate_max_nm_per_s > fr3.torque_rate_max_nm_per_s:
+        above.append(f"limits.torque_rate_max_nm_per_s={limits.torque_rate_max_nm_per_s:g} > "
+                     f"{fr3.torque_rate_max_nm_per_s:g} Nm/s")
+    return above
+
+
+# ---------------------------------------------------------------- buffer layout and kernel
+def limiter_size(n: int) -> int:
+    """Length of a torque-limiter buffer for ``n`` joints."""
+    return 1 + 3 * n
+
+
+@njit(cache=True)
+def limiter_views(buf):
+    """(par [max change per tick], tau_max, previous output without gravity, output)."""
+    n = (buf.shape[0] - 1) // 3
+    par, o = _next(buf, 0, 1)
+    tau_max, o = _next(buf, o, n)
+    last, o = _next(buf, o, n)
+    out, o = _next(buf, o, n)
+    return par, tau_max, last, out
+
+
+@njit(cache=True)
+def limit_rate_kernel(tau_desired, tau_last, max_delta, out) -> None:
+    """out = tau_last + clip(tau_desired - tau_last, -max_delta, max_delta) (NaN propagates)."""
+    for j in range(out.shape[0]):
+        d = tau_desired[j] - tau_last[j]
+        if d > max_delta:
+            d = max_delta
+        if d < -max_delta:
+            d = -max_delta
+        out[j] = d + tau_last[j]
+
+
+@njit(cache=True)
+def saturate_kernel(tau, tau_max, out) -> None:
+    """out = clip(tau, -tau_max, tau_max) per joint (NaN propagates)."""
+    for j in range(out.shape[0]):
+        v = tau[j]
+        if v > tau_max[j]:
+            v = tau_max[j]
+        if v < -tau_max[j]:
+            v = -tau_max[j]
+        out[j] = v
+
+
+@njit(cache=True)
+def torque_limiter(tau_no_gravity, tau_gravity, buf) -> None:
+    """Rate-limit without gravity, add gravity, saturate; remember output - gravity."""
+    par, tau_max, last, out = limiter_views(buf)
+    limit_rate_kernel(tau_no_gravity, last, par[0], out)
+    for j in range(out.shape[0]):
+        out[j] += tau_gravity[j]
+    saturate_kernel(out, tau_max, out)
+    for j in range(out.shape[0]):
+        last[j] = out[j] - tau_gravity[j]
 
 
 def limit_rate(
@@ -28,7 +116,7 @@ def limit_rate(
     tau_desired = np.asarray(tau_desired, dtype=np.float64)
     if out is None:
         out = np.empty_like(tau_desired)
-    kernels.limit_rate(
+    limit_rate_kernel(
         tau_desired, np.asarray(tau_last, dtype=np.float64), float(max_delta_nm), out
     )
     return out
@@ -39,14 +127,14 @@ def saturate(tau: np.ndarray, tau_max: np.ndarray, out: np.ndarray | None = None
     tau = np.asarray(tau, dtype=np.float64)
     if out is None:
         out = np.empty_like(tau)
-    kernels.saturate(tau, np.asarray(tau_max, dtype=np.float64), out)
+    saturate_kernel(tau, np.asarray(tau_max, dtype=np.float64), out)
     return out
 
 
 class TorqueLimiter:
-    """Stateful torque-rate limiter followed by saturation (``kernels.torque_limiter``).
+    """Stateful torque-rate limiter followed by saturation (``torque_limiter``).
 
-    ``tau_max`` and ``output`` are views of ``buffer`` (layout: ``kernels.limiter_views``).
+    ``tau_max`` and ``output`` are views of ``buffer`` (layout: ``limiter_views``).
 
     Like libfranka, the rate limit is applied to the torque *without* gravity (libfranka's
     ``tau_J_d`` excludes gravity, which the robot adds itself); gravity is then added and the
@@ -61,8 +149,8 @@ class TorqueLimiter:
             config: Limits.
             dt_s: Control period [s]; the per-tick bound is ``torque_rate_max_nm_per_s * dt_s``.
         """
-        self.buffer = np.zeros(kernels.limiter_size(len(config.torque_max_nm)))
-        par, self.tau_max, self._last_no_gravity, self.output = kernels.limiter_views(self.buffer)
+        self.buffer = np.zeros(limiter_size(len(config.torque_max_nm)))
+        par, self.tau_max, self._last_no_gravity, self.output = limiter_views(self.buffer)
         self.tau_max[:] = config.torque_max_nm
         self.max_delta_nm = config.torque_rate_max_nm_per_s * dt_s
         par[0] = self.max_delta_nm
@@ -84,7 +172,7 @@ class TorqueLimiter:
         Returns:
             The torque to apply (7,) [Nm]; an internal buffer, overwritten on the next call.
         """
-        kernels.torque_limiter(
+        torque_limiter(
             np.asarray(tau_no_gravity, dtype=np.float64),
             np.asarray(tau_gravity, dtype=np.float64),
             self.buffer,

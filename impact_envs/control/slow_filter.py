@@ -12,17 +12,82 @@ force) until the gap reaches c, then an exponential with time constant ~1/eta (0
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-from impact_envs.control import kernels
-from impact_envs.control.config import SlowWrenchConfig
+from impact_envs.control.kernel_layout import _next
+from impact_envs.control.validation import check_positive
+
+
+@dataclass(frozen=True)
+class SlowWrenchConfig:
+    """Clipped first-order filter producing w_slow, the internal model's training target.
+
+    Attributes:
+        rate_force_per_s: eta of the force axes [1/s]; per-tick gain eta * dt (default 20,
+            a 50 ms time constant; paper: 2.0, docs/controller.md "Presets").
+        rate_torque_per_s: eta of the torque axes [1/s] (paper: 1.0).
+        clip_force_n: Per-axis clip of (w_ext - w_slow) on force axes [N] (paper: 10).
+        clip_torque_nm: Per-axis clip on torque axes [Nm] (paper: 1).
+    """
+
+    rate_force_per_s: float = 20.0
+    rate_torque_per_s: float = 1.0
+    clip_force_n: float = 10.0
+    clip_torque_nm: float = 1.0
+
+    def __post_init__(self) -> None:
+        check_positive("rate_force_per_s", self.rate_force_per_s)
+        check_positive("rate_torque_per_s", self.rate_torque_per_s)
+        check_positive("clip_force_n", self.clip_force_n)
+        check_positive("clip_torque_nm", self.clip_torque_nm)
+
+    @property
+    def max_force_slew_n_per_s(self) -> float:
+        """Largest per-axis force rate of w_slow, eta_f * clip_f [N/s] (default 200, paper 20)."""
+        return self.rate_force_per_s * self.clip_force_n
+
+
+# ---------------------------------------------------------------- buffer layout and kernel
+SLOW_FILTER_SIZE = 32
+"""Length of a slow-filter buffer."""
+
+
+@njit(cache=True)
+def slow_filter_views(buf):
+    """(par [1 / (eta_f c_f), slow_rate], eta, gain, clip, w_slow, rate)."""
+    par, o = _next(buf, 0, 2)
+    eta, o = _next(buf, o, 6)
+    gain, o = _next(buf, o, 6)
+    clip, o = _next(buf, o, 6)
+    w_slow, o = _next(buf, o, 6)
+    rate, o = _next(buf, o, 6)
+    return par, eta, gain, clip, w_slow, rate
+
+
+@njit(cache=True)
+def slow_filter_update(wrench_ext, buf) -> float:
+    """w_slow += eta dt clip(w_ext - w_slow, -c, c); returns (and stores) the slow rate."""
+    par, eta, gain, clip, w_slow, rate = slow_filter_views(buf)
+    for i in range(6):
+        d = wrench_ext[i] - w_slow[i]
+        if d > clip[i]:
+            d = clip[i]
+        if d < -clip[i]:
+            d = -clip[i]
+        rate[i] = eta[i] * d
+        w_slow[i] += d * gain[i]
+    fx, fy, fz = rate[0], rate[1], rate[2]
+    par[1] = math.sqrt(fx * fx + fy * fy + fz * fz) * par[0]
+    return par[1]
 
 
 class SlowWrenchFilter:
-    """Per-axis clipped low-pass and slow-wrench rate (``kernels.slow_filter_update``).
+    """Per-axis clipped low-pass and slow-wrench rate (``slow_filter_update``).
 
-    The arrays are views of ``buffer`` (layout: ``kernels.slow_filter_views``).
+    The arrays are views of ``buffer`` (layout: ``slow_filter_views``).
 
     Attributes:
         wrench_slow_world: w_slow (6,) [N, Nm], world frame, robot-on-environment sign.
@@ -38,8 +103,8 @@ class SlowWrenchFilter:
         self.dt_s = dt_s
         f, t = config.rate_force_per_s, config.rate_torque_per_s
         cf, ct = config.clip_force_n, config.clip_torque_nm
-        self.buffer = np.zeros(kernels.SLOW_FILTER_SIZE)
-        views = kernels.slow_filter_views(self.buffer)
+        self.buffer = np.zeros(SLOW_FILTER_SIZE)
+        views = slow_filter_views(self.buffer)
         self._par = views[0]  # [1 / (eta_f c_f), slow_rate]
         self.eta_per_s, self.gain, self.clip, self.wrench_slow_world, self.rate_world = views[1:]
         self._par[0] = 1.0 / config.max_force_slew_n_per_s
@@ -64,7 +129,7 @@ class SlowWrenchFilter:
     def update(self, wrench_ext_world: np.ndarray) -> np.ndarray:
         """Advance one tick toward ``wrench_ext_world`` (6,) and return w_slow (6,)."""
         w_ext = np.asarray(wrench_ext_world, dtype=np.float64)
-        kernels.slow_filter_update(w_ext, self.buffer)
+        slow_filter_update(w_ext, self.buffer)
         return self.wrench_slow_world
 
 

@@ -21,9 +21,10 @@ import numpy as np
 import torch
 from safetensors.torch import load_file, save_file
 
-from impact_envs.control import kernels
-from impact_envs.control.config import InternalModelConfig
-from impact_envs.control.internal_model_net import (
+from impact_envs.control.internal_model import kernels
+from impact_envs.control.internal_model.config import InternalModelConfig
+from impact_envs.control.internal_model.gate import SurpriseGate
+from impact_envs.control.internal_model.net import (
     FEATURE_DIM,
     FEATURE_NAMES,
     FEATURE_OFFSET,
@@ -33,19 +34,11 @@ from impact_envs.control.internal_model_net import (
     build_network,
     sgd_step,
 )
-from impact_envs.control.replay import ReplayBuffer
-from impact_envs.control.surprise_gate import SurpriseGate
+from impact_envs.control.internal_model.replay import ReplayBuffer
+from impact_envs.control.kernel_layout import STORE, TRAIN
 from impact_envs.errors import CheckpointError, InvalidArgumentError
 
-__all__ = [
-    "FEATURE_DIM",
-    "FEATURE_NAMES",
-    "FEATURE_OFFSET",
-    "FEATURE_SCALE",
-    "OUTPUT_SCALE",
-    "InternalModel",
-    "build_network",
-]
+__all__ = ["InternalModel", "ModelSnapshot"]
 
 
 @dataclass(frozen=True)
@@ -243,9 +236,9 @@ class InternalModel:
     def learn(self, flags: int, wrench_slow_world: np.ndarray, mask: np.ndarray) -> None:
         """Store a replay sample (``flags & STORE``) and/or take an SGD step (``& TRAIN``)."""
         np.multiply(wrench_slow_world, self._inv_output_scale, out=self._target)
-        if flags & kernels.STORE:
+        if flags & STORE:
             self.replay.add(self.history_input(), self._target, mask)
-        if flags & kernels.TRAIN:
+        if flags & TRAIN:
             self.train_step(self.history_input(), self._target, mask)
 
     def train_step(self, x: np.ndarray, target: np.ndarray, mask: np.ndarray) -> float:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from impact_envs.control.config import InternalModelConfig
+from impact_envs.control.internal_model.config import InternalModelConfig
 
 FEATURE_NAMES = ("q",) * 7 + ("dq",) * 7 + ("gripper_width",) + ("pos_ee",) * 3 + ("w_ext",) * 6
 FEATURE_DIM = len(FEATURE_NAMES)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.control import kernels
+from impact_envs.control.internal_model.kernels import gate_update
 
 
 class SurpriseGate:
@@ -16,7 +16,7 @@ class SurpriseGate:
     ``release_threshold_n`` (release == open reproduces the literal single threshold).
     Learning additionally pauses (the gate stays latched) while the slow wrench is not
     quasi-steady, because w_slow is then still moving and is not a valid target. The logic is
-    ``kernels.gate_update`` (also run inside ``kernels.controller_tick``).
+    ``kernels.gate_update`` (also run inside ``controller_tick``).
 
     Attributes:
         open_threshold_n: Surprise that opens the gate [N].
@@ -64,7 +64,7 @@ class SurpriseGate:
             surprise_n: |w_pred - w_slow| over the (unmasked) force axes [N].
             slow_rate: Dimensionless slow-wrench rate (see ``SlowWrenchFilter.slow_rate``).
         """
-        is_open, learn = kernels.gate_update(
+        is_open, learn = gate_update(
             self.is_open, float(surprise_n), float(slow_rate),
             float(self.open_threshold_n), float(self.release_threshold_n),
             float(self.slow_rate_max),

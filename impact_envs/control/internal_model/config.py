@@ -1,0 +1,69 @@
+"""Configuration of the internal model stage (network, learning, surprise gate, replay)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from impact_envs.control.validation import check_positive
+from impact_envs.errors import InvalidArgumentError
+
+
+@dataclass(frozen=True)
+class InternalModelConfig:
+    """Internal model network, online learner, surprise gate and replay buffer.
+
+    Attributes:
+        history_length: Ticks L of per-tick features fed to the network (paper: 32).
+        hidden_sizes: Widths of the tanh hidden layers (own choice: (64, 64)).
+        learning_rate: Plain SGD step size on the normalized MSE (default 0.1; paper: 0.01).
+        surprise_open_n: Gate opens when the force surprise reaches this value [N] (default
+            2.5, 4.5x the largest excursion of the simulated estimator's force noise at
+            rest, docs/controller.md "Presets"; paper: 5).
+        surprise_release_n: Open gate closes when the force surprise falls below this [N]
+            (own choice 0.5; equal to ``surprise_open_n`` gives the literal single threshold).
+        slow_rate_max: Learning only while the slow-wrench rate (|dw_slow/dt|_force divided by
+            eta_f * clip_f, dimensionless) is at most this (default 1.5: pauses only while
+            w_slow slews on several force axes at once; paper: 0.2).
+        update_every: Ticks between SGD steps while learning (own choice: 5).
+        batch_size: Samples per SGD step: the current one plus replayed ones (own choice: 16).
+        replay_capacity: FIFO capacity of the replay buffer [samples] (own choice: 256).
+        replay_period: Ticks between stored quasi-steady samples (own choice: 10, i.e. 10 ms).
+        seed: Seed of the weight initialisation and of replay sampling.
+        wrench_feature: Feed the estimated wrench to the network (default True, as both
+            presets). False zeroes those six inputs, so the model predicts from the robot's
+            state (joints, gripper, TCP position) alone; an experiment, docs/results.md §1.
+    """
+
+    history_length: int = 32
+    hidden_sizes: tuple[int, ...] = (64, 64)
+    learning_rate: float = 0.1
+    surprise_open_n: float = 2.5
+    surprise_release_n: float = 0.5
+    slow_rate_max: float = 1.5
+    update_every: int = 5
+    batch_size: int = 16
+    replay_capacity: int = 256
+    replay_period: int = 10
+    seed: int = 0
+    wrench_feature: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "hidden_sizes", tuple(int(h) for h in self.hidden_sizes))
+        for name in ("history_length", "update_every", "batch_size", "replay_capacity"):
+            if int(getattr(self, name)) < 1:
+                raise InvalidArgumentError(f"invalid {name} {getattr(self, name)!r}; valid: >= 1")
+        if self.replay_period < 1:
+            raise InvalidArgumentError(f"invalid replay_period {self.replay_period!r}; valid: >= 1")
+        if not self.hidden_sizes or min(self.hidden_sizes) < 1:
+            raise InvalidArgumentError(
+                f"invalid hidden_sizes {self.hidden_sizes!r}; valid: non-empty, all >= 1"
+            )
+        check_positive("learning_rate", self.learning_rate)
+        check_positive("surprise_open_n", self.surprise_open_n)
+        check_positive("surprise_release_n", self.surprise_release_n, allow_zero=True)
+        check_positive("slow_rate_max", self.slow_rate_max)
+        if self.surprise_release_n > self.surprise_open_n:
+            raise InvalidArgumentError(
+                f"invalid surprise_release_n {self.surprise_release_n!r}; "
+                f"valid: 0 <= release <= surprise_open_n ({self.surprise_open_n})"
+            )
