@@ -4,7 +4,7 @@ Numba's ``cache=True`` keys a compiled function on the timestamp of the file tha
 it. A cached function that calls (and inlines) a kernel from another module is therefore
 loaded stale after only that other module changed: e.g. ``loop/tick.py::loop_tick``, which
 inlines the whole controller tick from ``control/kernels*.py``, kept running an old
-controller after ``kernel_stages.py`` changed (numba documents this under "Cache
+controller after a stage kernel changed (numba documents this under "Cache
 invalidation"). This module stamps each cache directory with a digest of *all* kernel sources
 and deletes the kernel modules' cached functions there when the digest differs, so the next
 call recompiles them. It runs on ``import impact_envs`` (file reads and a hash, ~1 ms; numba
