@@ -136,11 +136,37 @@ def test_rot6d_gram_schmidt_of_perturbed_input() -> None:
 
 
 @pytest.mark.parametrize(
-    "bad", [np.zeros(6), np.array([1.0, 0, 0, 2.0, 0, 0]), np.array([np.nan, 0, 0, 0, 1, 0])]
+    "bad", [np.array([np.nan, 0, 0, 0, 1, 0]), np.array([1.0, 0, 0, 0, np.inf, 0])]
 )
-def test_rot6d_degenerate_raises(bad: np.ndarray) -> None:
-    with pytest.raises(InvalidArgumentError):
+def test_rot6d_non_finite_raises(bad: np.ndarray) -> None:
+    with pytest.raises(InvalidArgumentError, match="valid: finite numbers"):
         matrix_from_rot6d(bad)
+
+
+def _assert_rotation(rot: np.ndarray) -> None:
+    np.testing.assert_allclose(rot.T @ rot, np.eye(3), atol=1e-12)
+    assert np.linalg.det(rot) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_degenerate_rot6d_maps_to_the_documented_rotation() -> None:
+    """Zero first column -> world x; a second column parallel, antiparallel or zero -> the
+    world axis least aligned with b1 (ties: x first), orthogonalized."""
+    np.testing.assert_array_equal(matrix_from_rot6d(np.zeros(6)), np.eye(3))
+    np.testing.assert_array_equal(matrix_from_rot6d(np.array([1.0, 0, 0, 2.0, 0, 0])), np.eye(3))
+    np.testing.assert_array_equal(matrix_from_rot6d(np.array([0.0, 0, 0, 0, 0, 1])),
+                                  np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]))
+    rot = matrix_from_rot6d(np.array([-1.0, 1, 1, 1, -1, -1]))  # issue 16: PPO's clipped corner
+    _assert_rotation(rot)
+    b1 = np.array([-1.0, 1, 1]) / np.sqrt(3)
+    b2 = np.array([1.0, 0, 0]) - b1[0] * b1
+    np.testing.assert_allclose(rot[:, :2], np.stack([b1, b2 / np.linalg.norm(b2)], 1),
+                               atol=1e-15)
+
+
+def test_every_corner_of_the_action_box_is_a_rotation() -> None:
+    corners = np.array(np.meshgrid(*[[-1.0, 0.0, 1.0]] * 6)).reshape(6, -1).T
+    for c in corners:
+        _assert_rotation(matrix_from_rot6d(c))
 
 
 def test_zero_quaternion_raises() -> None:

@@ -173,22 +173,44 @@ def rot6d_from_matrix(rot: np.ndarray) -> np.ndarray:
     return np.concatenate([rot[:, 0], rot[:, 1]])
 
 
+ROT6D_MIN_NORM = 1e-9
+"""Below this length a rot6d column (or the second column's part orthogonal to the first) is
+degenerate and replaced as ``matrix_from_rot6d`` documents."""
+
+
+def _least_aligned_axis(x: float, y: float, z: float) -> tuple[float, float, float]:
+    """The world axis with the smallest |component| of (x, y, z) (first on ties)."""
+    mags = [abs(x), abs(y), abs(z)]
+    i = mags.index(min(mags))
+    return (1.0 if i == 0 else 0.0, 1.0 if i == 1 else 0.0, 1.0 if i == 2 else 0.0)
+
+
 def matrix_from_rot6d(rot6d: np.ndarray) -> np.ndarray:
     """Rotation matrix from rot6d via Gram-Schmidt (columns b1, b2, b1 x b2).
 
+    Every finite input gives a rotation (an RL policy's clipped corners included): a first
+    column shorter than ``ROT6D_MIN_NORM`` becomes world x; a second column whose part
+    orthogonal to b1 is shorter than that (zero, parallel or antiparallel to b1) is replaced by
+    the world axis least aligned with b1 (first of x, y, z on ties), then orthogonalized.
+
     Raises:
-        InvalidArgumentError: If the two 3-vectors are (nearly) zero or parallel.
+        InvalidArgumentError: If an entry is not finite.
     """
     x1, y1, z1, x2, y2, z2 = np.asarray(rot6d, dtype=float).reshape(6).tolist()
+    if not all(math.isfinite(v) for v in (x1, y1, z1, x2, y2, z2)):
+        raise InvalidArgumentError(f"invalid rot6d {rot6d!r}; valid: finite numbers")
     n1 = math.sqrt(x1 * x1 + y1 * y1 + z1 * z1)
-    if not (n1 > 1e-9 and math.isfinite(n1)):
-        raise InvalidArgumentError(f"invalid rot6d {rot6d!r}; valid: finite, non-zero columns")
+    if not n1 > ROT6D_MIN_NORM:
+        x1, y1, z1, n1 = 1.0, 0.0, 0.0, 1.0
     x1, y1, z1 = x1 / n1, y1 / n1, z1 / n1
     d = x1 * x2 + y1 * y2 + z1 * z2
     x2, y2, z2 = x2 - d * x1, y2 - d * y1, z2 - d * z1
     n2 = math.sqrt(x2 * x2 + y2 * y2 + z2 * z2)
-    if not (n2 > 1e-9 and math.isfinite(n2)):
-        raise InvalidArgumentError(f"invalid rot6d {rot6d!r}; valid: non-parallel columns")
+    if not n2 > ROT6D_MIN_NORM:
+        x2, y2, z2 = _least_aligned_axis(x1, y1, z1)
+        d = x1 * x2 + y1 * y2 + z1 * z2
+        x2, y2, z2 = x2 - d * x1, y2 - d * y1, z2 - d * z1
+        n2 = math.sqrt(x2 * x2 + y2 * y2 + z2 * z2)
     x2, y2, z2 = x2 / n2, y2 / n2, z2 / n2
     return np.array([
         [x1, x2, y1 * z2 - z1 * y2],

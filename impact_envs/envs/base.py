@@ -182,6 +182,16 @@ class ImpactEnv(gym.Env):
         """
         self._warm = snapshot
 
+    @property
+    def target_pos_world(self) -> np.ndarray:
+        """The TCP position target of the last action (or the start pose after reset) [m]."""
+        return self._target_pos.copy()
+
+    @property
+    def target_quat_world(self) -> np.ndarray:
+        """The TCP orientation target of the last action (w, x, y, z)."""
+        return self._target_quat.copy()
+
     def set_object_mass(self, mass_kg: float) -> None:
         """Persistently set the object mass [kg]."""
         self.set_param("object_mass", mass_kg)

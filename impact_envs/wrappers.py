@@ -1,0 +1,66 @@
+"""Actions for reinforcement learning: a symmetric ``Box(-1, 1)`` over an IMPACT env's own.
+
+The envs act on absolute TCP targets in metres (``Box(10,)``: position in the task's
+workspace box, rot6d, gripper), which is what the scripted experts and the Diffusion Policies
+emit. RL libraries expect a symmetric, normalized box; ``RLActions`` maps one onto the other:
+
+- ``mode="absolute"`` (10 values in [-1, 1]): the position scaled to the workspace box
+  (-1 its low corner, +1 its high corner), rot6d and gripper as they are (every rot6d in the
+  box is a valid rotation, ``control.lie.matrix_from_rot6d``).
+- ``mode="delta"`` (7 values in [-1, 1]): a change of the TCP *target* per policy step, as
+  robosuite's and ManiSkill's delta end-effector controllers: translation up to
+  ``max_step_m`` along each world axis, rotation vector up to ``max_turn_rad`` per axis applied
+  in the world frame, then the gripper. Relative to the previous target, not the measured
+  pose, so a sagging load does not make the target drift.
+
+Shipped checkpoints are unaffected (they act on the unwrapped env).
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from impact_envs.control.lie import quat_to_matrix, rot6d_from_matrix, so3_exp
+from impact_envs.errors import check_choice
+
+ACTION_MODES = ("absolute", "delta")
+
+
+class RLActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
+    """``Box(-1, 1)`` actions for an IMPACT env (see the module docstring).
+
+    Args:
+        env: An IMPACT env (``gym.make("IMPACT/Hammer-v0", ...)``), possibly wrapped.
+        mode: ``"absolute"`` or ``"delta"``.
+        max_step_m: Largest translation of the target per step in ``"delta"`` mode [m].
+        max_turn_rad: Largest rotation about each world axis per step in ``"delta"`` [rad].
+    """
+
+    def __init__(self, env: gym.Env, mode: str = "absolute", max_step_m: float = 0.02,
+                 max_turn_rad: float = 0.1) -> None:
+        check_choice("action mode", mode, ACTION_MODES)
+        gym.utils.RecordConstructorArgs.__init__(self, mode=mode, max_step_m=max_step_m,
+                                                 max_turn_rad=max_turn_rad)
+        gym.ActionWrapper.__init__(self, env)
+        self.mode, self.max_step_m, self.max_turn_rad = mode, float(max_step_m), float(max_turn_rad)
+        task = env.unwrapped.task
+        self._low, self._high = task.workspace_low, task.workspace_high
+        n = 10 if mode == "absolute" else 7
+        self.action_space = spaces.Box(-1.0, 1.0, (n,), dtype=np.float32)
+
+    def action(self, action: np.ndarray) -> np.ndarray:
+        """The wrapped env's absolute action (10,) for a normalized one."""
+        a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
+        out = np.empty(10, dtype=np.float32)
+        if self.mode == "absolute":
+            out[:3] = self._low + (a[:3] + 1.0) * 0.5 * (self._high - self._low)
+            out[3:] = a[3:]
+            return out
+        base = self.env.unwrapped
+        out[:3] = np.clip(base.target_pos_world + self.max_step_m * a[:3], self._low, self._high)
+        turn = so3_exp(self.max_turn_rad * a[3:6])
+        out[3:9] = rot6d_from_matrix(turn @ quat_to_matrix(base.target_quat_world))
+        out[9] = a[6]
+        return out
