@@ -198,3 +198,24 @@ def test_expert_closed_loop_compensation_finds_the_sag_without_the_mass():
         make_expert("IMPACT/Hammer-v0", compensation="psychic")
 
 
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_dense_reward_grows_along_the_expert_and_is_1_on_success(env_id):
+    """Shaped reward in [0, 1]; on a solved expert episode its later half beats its start."""
+    env = gym.make(env_id, reward_type="dense", terminate_on_success=True)
+    expert = make_expert(env_id)
+    obs, _ = env.reset(seed=5)
+    expert.reset(1)
+    rewards = []
+    for _ in range(env.spec.max_episode_steps):
+        obs, reward, terminated, _, info = env.step(expert.act(stack_obs([obs]))[0])
+        rewards.append(reward)
+        assert 0.0 <= reward <= 1.0
+        assert (reward == 1.0) == info["is_success"]
+        if terminated:
+            break
+    assert np.mean(rewards[len(rewards) // 2:]) > np.mean(rewards[:10])
+    env.close()
+    with pytest.raises(InvalidArgumentError, match="valid choices: sparse, dense"):
+        gym.make(env_id, reward_type="shaped")

@@ -33,6 +33,9 @@ POLICY_HZ = 30
 CONTROL_HZ = 1000
 CONTROLLERS = ("impact", "impedance")
 ESTIMATORS = ("residual", "momentum")
+REWARD_TYPES = ("sparse", "dense")
+"""``"sparse"``: 1.0 on steps where the task is accomplished, else 0.0 (default);
+``"dense"``: the task's shaped ``dense_reward`` in [0, 1] (docs/envs.md)."""
 
 
 ROBOT_OBSERVATIONS = (
@@ -100,9 +103,12 @@ class ImpactEnv(gym.Env):
         terminate_on_success: bool = False,
         render_mode: str | None = None,
         render: RenderOptions | None = None,
+        reward_type: str = "sparse",
     ) -> None:
         check_choice("controller", controller, CONTROLLERS)
         check_choice("estimator", estimator, ESTIMATORS)
+        check_choice("reward_type", reward_type, REWARD_TYPES)
+        self.reward_type = reward_type
         if not isinstance(controller_preset, ControllerConfig):
             check_choice("controller_preset", controller_preset, PRESETS)
         robot, render = robot or RobotOptions(), render or RenderOptions()
@@ -246,7 +252,9 @@ class ImpactEnv(gym.Env):
         success = bool(self.task.is_success(self.sim))
         self._success_once |= success
         terminated = bool(success and self.terminate_on_success)
-        return self._observation(), float(success), terminated, False, self._info(success, metrics)
+        dense = self.reward_type == "dense"
+        reward = self.task.dense_reward(self.sim) if dense else float(success)
+        return self._observation(), reward, terminated, False, self._info(success, metrics)
 
     def _run_ticks(self, pos0, quat0, pos1, quat1, gripper: float,
                    wrench_cmd: np.ndarray | None, learn_mask: np.ndarray | None

@@ -34,7 +34,10 @@ class CalligraphyEnv(ImpactEnv):
     sensing in observations.
 
     ## Rewards
-    Sparse: 1.0 on steps where the task is accomplished, else 0.0.
+    Sparse (default, ``reward_type="sparse"``): 1.0 on steps where the task is
+    accomplished, else 0.0. ``reward_type="dense"``: a shaped reward in [0, 1], 1.0
+    exactly on success: follow the pen-tip reference (1 cm error halves that part) and,
+    while writing, keep the normal force in its band.
 
     ## Success
     After the last stroke (``info["writing_done"]``), over all samples taken at 100 Hz while
@@ -61,7 +64,7 @@ class CalligraphyEnv(ImpactEnv):
     "surface_friction": μ}`` or ``reset(options=...)`` (tool_mass default 0.1, range
     0.02–5 kg, the sweep axis; surface_friction default 0.3, range 0.05–1.5), ``estimator``,
     ``controller_preset``, ``robot``, ``persist_internal_model``, ``terminate_on_success``,
-    ``render_mode`` ("rgb_array"), ``render`` (as for ``IMPACT/Hammer-v0``).
+    ``reward_type``, ``render_mode`` ("rgb_array"), ``render`` (as for ``IMPACT/Hammer-v0``).
 
     ## Version history
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
@@ -78,6 +81,7 @@ class CalligraphyEnv(ImpactEnv):
       ``robot=RobotOptions(...)``, ``width``, ``height`` and ``camera`` of
       ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
       ``ControllerConfig`` (replacing ``controller_config``).
+      2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
     """
 
     @classmethod

@@ -35,7 +35,10 @@ class DisturbanceEnv(ImpactEnv):
     sensing in observations.
 
     ## Rewards
-    Sparse: 1.0 on steps where the task is accomplished, else 0.0.
+    Sparse (default, ``reward_type="sparse"``): 1.0 on steps where the task is
+    accomplished, else 0.0. ``reward_type="dense"``: a shaped reward in [0, 1], 1.0
+    exactly on success: reach, grasp, lift and carry the trough to the goal
+    (``pick_place_reward``), plus the time held.
 
     ## Success
     Once the load has been added and the disturbance has reached its final value (step on,
@@ -59,7 +62,7 @@ class DisturbanceEnv(ImpactEnv):
     "object_mass": kg, "added_mass": kg}`` or ``reset(options=...)`` (defaults 2 N, 0.3 kg,
     0.3 kg; ranges 0–40 N, 0.05–5 kg, 0–5 kg), ``object_mass`` [kg] (shortcut), ``estimator``,
     ``controller_preset``, ``robot``, ``persist_internal_model``, ``terminate_on_success``,
-    ``render_mode`` ("rgb_array"), ``render`` (as for ``IMPACT/Hammer-v0``).
+    ``reward_type``, ``render_mode`` ("rgb_array"), ``render`` (as for ``IMPACT/Hammer-v0``).
 
     ## Version history
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
@@ -72,6 +75,7 @@ class DisturbanceEnv(ImpactEnv):
       ``robot=RobotOptions(...)``, ``width``, ``height`` and ``camera`` of
       ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
       ``ControllerConfig`` (replacing ``controller_config``).
+      2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
     """
 
     @classmethod

@@ -33,7 +33,10 @@ class DumbbellEnv(ImpactEnv):
     ``goal_pos`` (3) [m] pad centre on the table. No force sensing in observations.
 
     ## Rewards
-    Sparse: 1.0 on steps where the task is accomplished, else 0.0.
+    Sparse (default, ``reward_type="sparse"``): 1.0 on steps where the task is
+    accomplished, else 0.0. ``reward_type="dense"``: a shaped reward in [0, 1], 1.0
+    exactly on success: reach the bar centre, grasp, lift 2 cm, bring it to its resting
+    height on the pad (``pick_place_reward``).
 
     ## Success
     Both plates lie above the pad's footprint (0.30 × 0.18 m), the centre of mass is within
@@ -54,8 +57,8 @@ class DumbbellEnv(ImpactEnv):
 
     ## Arguments
     As for ``IMPACT/Hammer-v0`` (``controller``, ``estimator``, ``controller_preset``,
-    ``robot``, ``persist_internal_model``, ``terminate_on_success``, ``render_mode``,
-    ``render``), with ``object_mass`` [kg] defaulting to 2.5 (range 0.1–12).
+    ``robot``, ``persist_internal_model``, ``terminate_on_success``, ``reward_type``,
+    ``render_mode``, ``render``), with ``object_mass`` [kg] defaulting to 2.5 (range 0.1–12).
 
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
@@ -68,6 +71,7 @@ class DumbbellEnv(ImpactEnv):
       ``robot=RobotOptions(...)``, ``width``, ``height`` and ``camera`` of
       ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
       ``ControllerConfig`` (replacing ``controller_config``).
+      2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
     """
 
     @classmethod

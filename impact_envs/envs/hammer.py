@@ -32,7 +32,10 @@ class HammerEnv(ImpactEnv):
     basket centre. No force sensing in observations.
 
     ## Rewards
-    Sparse: 1.0 on steps where the task is accomplished, else 0.0.
+    Sparse (default, ``reward_type="sparse"``): 1.0 on steps where the task is
+    accomplished, else 0.0. ``reward_type="dense"``: a shaped reward in [0, 1], 1.0
+    exactly on success: reach the hammer's centre of mass, grasp, lift 2 cm, carry it over
+    the basket (``tasks/base.py::pick_place_reward``).
 
     ## Success
     The hammer's centre of mass lies inside the basket's inner footprint below the wall top
@@ -56,8 +59,9 @@ class HammerEnv(ImpactEnv):
     (``RobotOptions``: ``sensor_noise`` bool, ``grasp_force_n`` default 70 N,
     ``model_mass_error`` relative error of the controller's link masses),
     ``persist_internal_model`` (keep the learned internal model across resets),
-    ``terminate_on_success``, ``render_mode`` ("rgb_array"), ``render`` (``RenderOptions``:
-    ``width``, ``height``, ``camera`` "front" | "side").
+    ``terminate_on_success``, ``reward_type`` ("sparse" | "dense"), ``render_mode``
+    ("rgb_array"), ``render`` (``RenderOptions``: ``width``, ``height``, ``camera`` "front" |
+    "side").
 
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
@@ -70,6 +74,7 @@ class HammerEnv(ImpactEnv):
       ``robot=RobotOptions(...)``, ``width``, ``height`` and ``camera`` of
       ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
       ``ControllerConfig`` (replacing ``controller_config``).
+      2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
     """
 
     @classmethod

@@ -207,6 +207,22 @@ class CalligraphyTask(Task):
             return False
         return not missed_criteria(self.metrics.summary())
 
+    def dense_reward(self, sim: FrankaSim) -> float:
+        """Trace and press, in [0, 1]: 0.5 (1 - tanh(100 |tip - reference|)) for following the
+        pen-tip reference (a 1 cm error halves it), plus, while a stroke is being written, 0.5
+        when the normal force is in the band (7.5-22.5 N) and 0.5 (1 - tanh(|F - 15 N| / 7.5 N))
+        outside it; 1.0 on success."""
+        if self.is_success(sim):
+            return 1.0
+        goal, _ = self.reference.at(float(sim.data.time))
+        trace = 0.5 * (1.0 - np.tanh(100.0 * np.linalg.norm(self.tip_pos(sim) - goal)))
+        if self._stroke < 0:
+            return float(trace)
+        force = self._force_n
+        press = 0.5 if self.metrics.in_band(force) else 0.5 * (1.0 - np.tanh(
+            abs(force - 15.0) / 7.5))
+        return float(min(0.99, trace + press))
+
     def info(self, sim: FrankaSim) -> dict[str, float | bool | str]:
         force = self._force_n if self._stroke >= 0 else self.tip_force_n(sim)
         done = sim.data.time >= self.reference.t_end_s

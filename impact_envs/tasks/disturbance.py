@@ -16,7 +16,15 @@ import numpy as np
 
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import OBJECT_POSE, BodyMass, FreeBody, ObsEntry, Task, TaskParam
+from impact_envs.tasks.base import (
+    OBJECT_POSE,
+    BodyMass,
+    FreeBody,
+    ObsEntry,
+    Task,
+    TaskParam,
+    pick_place_reward,
+)
 
 KINDS = ("constant", "step", "slow")
 """Disturbance profile kinds."""
@@ -200,6 +208,18 @@ class DisturbanceTask(Task):
 
     def is_success(self, sim: FrankaSim) -> bool:
         return self.hold_s(float(sim.data.time)) >= HOLD_S
+
+    def dense_reward(self, sim: FrankaSim) -> float:
+        """``pick_place_reward`` toward the hold goal, plus up to 0.25 for the time held
+        (of the ``HOLD_S`` needed), capped below the success value 1."""
+        d, t = sim.data, float(sim.data.time)
+        base = pick_place_reward(sim.tcp_pose()[0], d.xipos[self.body],
+                                 sim.model.body_pos[self.goal_body],
+                                 sim.object_finger_contacts("trough") >= 2,
+                                 d.xipos[self.body, 2] - REST_Z_M, self.is_success(sim))
+        if base >= 1.0:
+            return 1.0
+        return min(0.99, base + 0.25 * min(1.0, self.hold_s(t) / HOLD_S))
 
     def info(self, sim: FrankaSim) -> dict[str, float | bool | str]:
         t = float(sim.data.time)

@@ -6,7 +6,15 @@ import numpy as np
 
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import OBJECT_POSE, BodyMass, FreeBody, ObsEntry, Task, TaskParam
+from impact_envs.tasks.base import (
+    OBJECT_POSE,
+    BodyMass,
+    FreeBody,
+    ObsEntry,
+    Task,
+    TaskParam,
+    pick_place_reward,
+)
 
 PLATE_APOTHEM_M = 0.0433
 """Half height of the hexagonal plates [m]: the bar centre (= COM) height when lying flat."""
@@ -82,3 +90,14 @@ class DumbbellTask(Task):
         footprint, height = self._on_pad(sim)
         return {"is_grasped": sim.object_finger_contacts("dumbbell") >= 2,
                 "on_pad": footprint and height}
+
+    def dense_reward(self, sim: FrankaSim) -> float:
+        """``pick_place_reward``: reach the bar centre, grasp, lift, bring the dumbbell to its
+        resting height on the pad."""
+        d = sim.data
+        goal = sim.model.body_pos[self.pad] + np.array([0.0, 0.0, PLATE_APOTHEM_M])
+        goal[2] = PAD_TOP_M + PLATE_APOTHEM_M
+        return pick_place_reward(sim.tcp_pose()[0], d.xipos[self.dumbbell], goal,
+                                 sim.object_finger_contacts("dumbbell") >= 2,
+                                 d.xipos[self.dumbbell, 2] - PLATE_APOTHEM_M,
+                                 self.is_success(sim))

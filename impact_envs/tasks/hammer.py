@@ -6,7 +6,15 @@ import numpy as np
 
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import OBJECT_POSE, BodyMass, FreeBody, ObsEntry, Task, TaskParam
+from impact_envs.tasks.base import (
+    OBJECT_POSE,
+    BodyMass,
+    FreeBody,
+    ObsEntry,
+    Task,
+    TaskParam,
+    pick_place_reward,
+)
 
 HANDLE_HALF_HEIGHT_M = 0.0125
 """Half thickness of the square handle [m]; the hammer lies flat at this COM height."""
@@ -71,3 +79,13 @@ class HammerTask(Task):
 
     def info(self, sim: FrankaSim) -> dict[str, float | bool]:
         return {"is_grasped": sim.object_finger_contacts("hammer") >= 2}
+
+    def dense_reward(self, sim: FrankaSim) -> float:
+        """``pick_place_reward``: reach the hammer's COM, grasp, lift, carry it over the basket
+        (goal: the basket centre, 5 cm above its floor)."""
+        d = sim.data
+        goal = sim.model.body_pos[self.basket] + np.array([0.0, 0.0, 0.05])
+        return pick_place_reward(sim.tcp_pose()[0], d.xipos[self.hammer], goal,
+                                 sim.object_finger_contacts("hammer") >= 2,
+                                 d.xipos[self.hammer, 2] - HANDLE_HALF_HEIGHT_M,
+                                 self.is_success(sim))
