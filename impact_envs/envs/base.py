@@ -7,6 +7,7 @@ steps), runs the controller on *noisy* sensor readings every tick, and applies t
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import importlib
 from typing import Any, Literal
@@ -22,6 +23,7 @@ from impact_envs.control.internal_model import ModelSnapshot
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.control.presets import PRESETS, preset_config, preset_name
 from impact_envs.envs.options import RenderOptions, RobotOptions
+from impact_envs.envs.state import EnvState, capture, restore
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.loop import ClosedLoop, TickTargets
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
@@ -105,6 +107,14 @@ class ImpactEnv(gym.Env):
         render: RenderOptions | None = None,
         reward_type: str = "sparse",
     ) -> None:
+        self._init_kwargs = {
+            "task": task, "controller": controller, "object_mass": object_mass,
+            "task_params": task_params, "estimator": estimator,
+            "controller_preset": controller_preset, "robot": robot,
+            "persist_internal_model": persist_internal_model,
+            "terminate_on_success": terminate_on_success, "render_mode": render_mode,
+            "render": render, "reward_type": reward_type,
+        }
         check_choice("controller", controller, CONTROLLERS)
         check_choice("estimator", estimator, ESTIMATORS)
         check_choice("reward_type", reward_type, REWARD_TYPES)
@@ -197,6 +207,34 @@ class ImpactEnv(gym.Env):
     def target_quat_world(self) -> np.ndarray:
         """The TCP orientation target of the last action (w, x, y, z)."""
         return self._target_quat.copy()
+
+    # ----------------------------------------------------------------- state
+    def get_state(self) -> EnvState:
+        """A full snapshot (simulator, arm model, controller, internal model with its replay,
+        task, targets, rng) to branch an episode: ``set_state`` restores it in place."""
+        return capture(self)
+
+    def set_state(self, state: EnvState) -> None:
+        """Restore a ``get_state`` snapshot of this env (or of one made with the same
+        arguments); the same actions then reproduce the trajectory bit for bit."""
+        restore(self, state)
+
+    def __deepcopy__(self, memo: dict) -> ImpactEnv:
+        """A new env with the same arguments, set to this one's state (a plain deep copy would
+        lose the views into MuJoCo's data that the loop actuates through)."""
+        new = type(self)(**copy.deepcopy(self._init_kwargs, memo))
+        new.set_state(self.get_state())
+        new.spec = self.spec
+        return new
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle as constructor arguments + ``get_state()`` (rebuilt by ``__setstate__``)."""
+        return {"kwargs": self._init_kwargs, "state": self.get_state(), "spec": self.spec}
+
+    def __setstate__(self, saved: dict[str, Any]) -> None:
+        self.__init__(**saved["kwargs"])
+        self.set_state(saved["state"])
+        self.spec = saved["spec"]
 
     def set_object_mass(self, mass_kg: float) -> None:
         """Persistently set the object mass [kg]."""

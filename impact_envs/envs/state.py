@@ -1,0 +1,108 @@
+"""A full snapshot of an IMPACT env: simulator, arm model, controller, internal model, task.
+
+``capture(env)`` copies everything that carries an episode from one step to the next;
+``restore(env, state)`` writes it back *into the env's own arrays*, so every view the loop,
+the controller and the simulator hold stays valid (a plain ``copy.deepcopy`` of an env broke
+them: the copy ran but no longer actuated). Restoring a captured state and replaying the
+same actions reproduces the trajectory bit for bit (tests/test_env_state.py).
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import mujoco
+import numpy as np
+import torch
+
+if TYPE_CHECKING:
+    from impact_envs.envs.base import ImpactEnv
+
+ENV_FIELDS = ("_params", "_episode_params", "_target_pos", "_target_quat", "_gripper_cmd",
+              "_step_count", "_success_once", "_q_meas", "_dq_meas", "_warm")
+"""ImpactEnv attributes that change during an episode."""
+
+
+@dataclass
+class EnvState:
+    """What ``ImpactEnv.get_state`` returns (all copies; restore with ``set_state``)."""
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    arrays: dict[str, np.ndarray]
+    weights: dict[str, torch.Tensor]
+    learner: dict[str, Any]
+    task: dict[str, Any]
+    env: dict[str, Any]
+    rng: np.random.Generator
+
+
+def _live_arrays(env: ImpactEnv) -> dict[str, np.ndarray]:
+    """Every array (by name) whose contents carry state between ticks, as the live objects."""
+    ctrl, dyn, sim = env.controller, env.dynamics, env.sim
+    im = ctrl.internal_model
+    arrays = {
+        "controller": ctrl.buffer, "grams": ctrl._grams, "wrench_maps": ctrl.wrench_maps,
+        "estimator": ctrl.estimator.buffer, "slow_filter": ctrl.slow_filter.buffer,
+        "impedance": ctrl.impedance.buffer, "limiter": ctrl.limiter.buffer,
+        "model32": im.kernel_args()[0], "model64": im.buffer,
+        "replay_inputs": im.replay.inputs, "replay_targets": im.replay.targets,
+        "replay_masks": im.replay.masks, "tau_bias": sim._tau_bias, "tau_applied": sim.tau_applied,
+        "q_model": dyn.q_model, "dq_model": dyn.dq_model,
+    }
+    arrays.update({f"arm_{k}": v for k, v in dyn.model_arrays._asdict().items()})
+    return arrays
+
+
+def _copy_model(dst: mujoco.MjModel, src: mujoco.MjModel) -> None:
+    """Copy every numeric array of ``src`` into ``dst`` (same scene: per-episode parameters
+    such as masses, inertias, goal positions and frictions are model fields)."""
+    for name in dir(src):
+        if name.startswith("_"):
+            continue
+        value = getattr(src, name, None)
+        if isinstance(value, np.ndarray) and value.size:
+            np.copyto(getattr(dst, name), value)
+
+
+def capture(env: ImpactEnv) -> EnvState:
+    """A deep copy of ``env``'s episode state."""
+    im = env.controller.internal_model
+    return EnvState(
+        model=copy.deepcopy(env.sim.model),
+        data=copy.deepcopy(env.sim.data),
+        arrays={k: v.copy() for k, v in _live_arrays(env).items()},
+        weights={k: v.detach().clone() for k, v in im.net.state_dict().items()},
+        learner={"count": im.replay.count, "head": im.replay._head,
+                 "replay_rng": copy.deepcopy(im.replay._rng), "n_updates": im.n_updates,
+                 "n_divergences": im.n_divergences, "is_reset": env.controller._is_reset},
+        task=copy.deepcopy(env.task.__dict__),
+        env=copy.deepcopy({k: getattr(env, k, None) for k in ENV_FIELDS}),
+        rng=copy.deepcopy(env.np_random),
+    )
+
+
+def restore(env: ImpactEnv, state: EnvState) -> None:
+    """Write ``state`` into ``env`` in place (an env of the same task and settings)."""
+    sim = env.sim
+    _copy_model(sim.model, state.model)
+    mujoco.mj_copyData(sim.data, sim.model, state.data)
+    for name, live in _live_arrays(env).items():
+        np.copyto(live, state.arrays[name])
+    ctrl = env.controller
+    im = ctrl.internal_model
+    with torch.no_grad():
+        for name, tensor in im.net.state_dict().items():
+            tensor.copy_(state.weights[name])
+    learner = state.learner
+    im.replay.count, im.replay._head = learner["count"], learner["head"]
+    im.replay._rng = copy.deepcopy(learner["replay_rng"])
+    im.n_updates, im.n_divergences = learner["n_updates"], learner["n_divergences"]
+    ctrl._is_reset = learner["is_reset"]
+    ctrl._fill_signals()
+    env.task.__dict__.update(copy.deepcopy(state.task))
+    for key, value in copy.deepcopy(state.env).items():
+        setattr(env, key, value)
+    env.np_random = copy.deepcopy(state.rng)
