@@ -1,12 +1,13 @@
 """impact-eval: paired-seed parameter sweeps, metrics, plots and reports for IMPACT methods.
 
-Entry point: ``impact-eval`` (:func:`impact_eval.cli.main`); see docs/eval.md. Submodules import
-their heavy dependencies lazily, so ``import impact_eval`` is cheap.
+Entry points: ``impact-eval`` (:func:`impact_eval.cli.main`) and, from Python,
+:func:`impact_eval.evaluate` for a policy object; see docs/eval.md. Submodules import their
+heavy dependencies lazily, so ``import impact_eval`` is cheap.
 """
 
 from __future__ import annotations
 
-__all__ = ["main"]
+__all__ = ["evaluate", "main"]
 
 
 def main() -> int:
@@ -14,3 +15,10 @@ def main() -> int:
     from impact_eval.cli import main as cli_main
 
     return cli_main()
+
+
+def evaluate(*args, **kwargs):  # noqa: ANN002, ANN003, ANN201 - documented in impact_eval.api
+    """``impact_eval.api.evaluate`` (imported on first use)."""
+    from impact_eval.api import evaluate as run
+
+    return run(*args, **kwargs)
