@@ -192,7 +192,7 @@ def run_sweep_command(argv: Sequence[str]) -> int:
     a = _with_defaults(sweep_parser().parse_args(argv))
     if not a.trust_sb3:
         return _run_sweep(a, argv)
-    from impact_eval.methods import TRUST_SB3_ENV_VAR
+    from impact_eval.sb3 import TRUST_SB3_ENV_VAR
 
     before = os.environ.get(TRUST_SB3_ENV_VAR)
     os.environ[TRUST_SB3_ENV_VAR] = "1"  # the workers inherit it

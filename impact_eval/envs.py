@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import gymnasium as gym
+import numpy as np
 
 from impact_envs.errors import ImpactError, InvalidArgumentError
 
@@ -177,3 +178,23 @@ def warm_kernels(env: gym.Env) -> None:
         env.step(env.action_space.sample())
     except Exception:  # noqa: BLE001, S110 - only a warm-up: the sweep reports real failures
         pass
+
+
+def method_env(env_id: str, spec: object, overrides: Sequence[str] = ()) -> gym.Env:
+    """``make_env`` for a method: its controller and preset, wrapped in
+    ``impact_envs.wrappers.RLActions`` when the method acts in one of its modes (an SB3 model
+    trained on the wrapper)."""
+    env = make_env(env_id, spec.controller, overrides, spec.preset)
+    if spec.action_mode is None:
+        return env
+    from impact_envs.wrappers import RLActions
+
+    if spec.action_mode == "absolute" and _is_unit_box(env.action_space, 10):
+        return env  # the env's own space already is the model's
+    return RLActions(env, mode=spec.action_mode)
+
+
+def _is_unit_box(space: gym.Space, n: int) -> bool:
+    """Whether ``space`` is ``Box(-1, 1, (n,))``."""
+    return (isinstance(space, gym.spaces.Box) and space.shape == (n,)
+            and bool(np.all(space.low == -1.0)) and bool(np.all(space.high == 1.0)))

@@ -15,7 +15,8 @@ machinery tested) without the scripted experts, diffusion policies or Stable-Bas
 | `impact_paper`    | DP checkpoint `<env>/vanilla`            | `impact`, preset `paper` |
 | `impact_warm`     | as `impact`, warm internal model         | `impact`    |
 | `scripted_impact_paper` | scripted expert                    | `impact`, preset `paper` |
-| `sb3:<path.zip>`  | SB3 PPO / SAC / TD3 policy, deterministic | `impedance` |
+| `sb3:<path.zip>`  | any SB3 algorithm's policy, deterministic (``sb3.py``) | `impact` |
+| `sb3_impedance:<path.zip>` | the same | `impedance` |
 """
 
 from __future__ import annotations
@@ -27,11 +28,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import gymnasium as gym
-import numpy as np
 
 from impact_envs.control.presets import PRESETS
 from impact_envs.errors import CheckpointError, InvalidArgumentError, check_choice
 from impact_envs.policies.interface import Policy
+from impact_eval.sb3 import load_sb3, sb3_action_mode
 
 CONTROLLERS: tuple[str, ...] = ("impedance", "impact")
 """Values of the env's ``controller`` kwarg."""
@@ -39,11 +40,8 @@ CONTROLLERS: tuple[str, ...] = ("impedance", "impact")
 CHECKPOINTS_ENV_VAR = "IMPACT_CHECKPOINTS"
 """Environment variable overriding the shipped checkpoint root ``impact_envs/checkpoints``."""
 
-SB3_PREFIX = "sb3:"
-
-TRUST_SB3_ENV_VAR = "IMPACT_TRUST_SB3"
-"""Set to ``1`` (or pass ``impact-eval --trust-sb3``) to allow loading ``sb3:<zip>``: SB3's zip
-format unpickles Python objects, so a crafted file executes code when loaded."""
+SB3_PREFIXES = {"sb3:": "impact", "sb3_impedance:": "impedance"}
+"""Method-name prefixes of a Stable-Baselines3 zip and the controller each runs under."""
 
 PolicyFactory = Callable[[str, gym.Env], Policy]
 """``factory(env_id, env) -> Policy``; ``env`` is a built env of this method's controller."""
@@ -62,11 +60,13 @@ class MethodSpec:
     warm: bool = False
     """Score episodes from an internal model already trained by one unscored warm-up episode
     of the same cell ("warm robot", the paper's Phase B; docs/eval.md)."""
+    action_mode: str | None = None
+    """``impact_envs.wrappers.RLActions`` mode the policy acts in (None: the env's own)."""
 
     @property
-    def env_key(self) -> tuple[str, str]:
-        """(controller, preset): methods with equal keys can share envs."""
-        return self.controller, self.preset
+    def env_key(self) -> tuple[str, str, str | None]:
+        """(controller, preset, action mode): methods with equal keys can share envs."""
+        return self.controller, self.preset, self.action_mode
 
 
 _REGISTRY: dict[str, MethodSpec] = {}
@@ -84,14 +84,17 @@ def register_method(spec: MethodSpec) -> None:
 
 def method_choices() -> list[str]:
     """Valid method names, including the ``sb3:<path.zip>`` pattern."""
-    return [*_REGISTRY, f"{SB3_PREFIX}<path.zip>"]
+    return [*_REGISTRY, *(f"{p}<path.zip>" for p in SB3_PREFIXES)]
 
 
 def resolve_method(name: str) -> MethodSpec:
     """Look a method up; ``sb3:<path>`` builds a spec on the fly."""
-    if name.startswith(SB3_PREFIX) and len(name) > len(SB3_PREFIX):
-        path = name[len(SB3_PREFIX) :]
-        return MethodSpec(name, "impedance", lambda _id, env: load_sb3(path, env), "SB3 policy")
+    for prefix, controller in SB3_PREFIXES.items():
+        if name.startswith(prefix) and len(name) > len(prefix):
+            path = name[len(prefix):]
+            return MethodSpec(name, controller, lambda _id, env, p=path: load_sb3(p, env),
+                              f"SB3 policy, {controller} control",
+                              action_mode=sb3_action_mode(path))
     if name not in _REGISTRY:
         raise InvalidArgumentError(
             f"unknown method {name!r}; valid choices: {', '.join(method_choices())}"
@@ -174,52 +177,6 @@ def _build_impact_dp(env_id: str, env: gym.Env) -> Policy:
     except CheckpointError:
         return _dp_factory("vanilla")(env_id, env)
     return _dp_factory("impact")(env_id, env)
-
-
-class SB3Policy:
-    """Stable-Baselines3 model behind the batched ``Policy`` protocol (deterministic actions)."""
-
-    def __init__(self, model: object) -> None:
-        self.model = model
-
-    def reset(self, n_envs: int) -> None:
-        """SB3 feed-forward policies are stateless: nothing to clear."""
-
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        """Deterministic actions ``(B, action_dim)`` for a batched observation."""
-        action, _ = self.model.predict(obs, deterministic=True)  # type: ignore[attr-defined]
-        return np.asarray(action, dtype=np.float32)
-
-
-def load_sb3(path: str, env: gym.Env) -> SB3Policy:
-    """Load an SB3 zip with ``PPO.load``, ``SAC.load``, ``TD3.load`` in turn (CPU).
-
-    Raises:
-        CheckpointError: missing file, unloadable file, or loading not allowed: SB3 zips are
-            unpickled and can run code, so they load only with ``$IMPACT_TRUST_SB3=1``.
-    """
-    if not (Path(path).is_file() or Path(path + ".zip").is_file()):
-        raise CheckpointError(f"SB3 checkpoint {path} does not exist")
-    if os.environ.get(TRUST_SB3_ENV_VAR) != "1":
-        raise CheckpointError(
-            f"refusing to load SB3 checkpoint {path}: SB3 zips are unpickled and can execute "
-            f"code; pass --trust-sb3 (or set {TRUST_SB3_ENV_VAR}=1) only for files you trust")
-    import stable_baselines3 as sb3
-
-    errors = []
-    for cls in (sb3.PPO, sb3.SAC, sb3.TD3):
-        try:
-            model = cls.load(path, device="cpu")
-        except Exception as exc:  # noqa: BLE001 - try the next algorithm
-            errors.append(f"{cls.__name__}: {type(exc).__name__}")
-            continue
-        if model.action_space.shape != env.action_space.shape:
-            raise CheckpointError(
-                f"SB3 checkpoint {path} has action shape {model.action_space.shape}, "
-                f"env has {env.action_space.shape}"
-            )
-        return SB3Policy(model)
-    raise CheckpointError(f"cannot load SB3 checkpoint {path} ({'; '.join(errors)})")
 
 
 for _spec in (

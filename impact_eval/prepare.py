@@ -21,6 +21,7 @@ from impact_eval.envs import (
     check_param,
     describe_env,
     make_env,
+    method_env,
     probe_values,
     warm_kernels,
 )
@@ -152,7 +153,7 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
 def _build_policies(req: SweepRequest, specs: list[MethodSpec], env_id: str) -> None:
     """Build each method's policy once (checkpoints load, experts exist), then drop it."""
     for spec in specs:
-        env = make_env(req.env_id, spec.controller, preset=spec.preset)
+        env = method_env(req.env_id, spec)
         try:
             spec.build(env_id, env)
         except ImpactError:

@@ -94,12 +94,11 @@ class Worker:
 
     def _envs(self, spec: MethodSpec, n: int) -> list[object]:
         """At least ``n`` envs of the method's (controller, preset)."""
-        from impact_eval.envs import make_env
+        from impact_eval.envs import method_env
 
         envs = self.envs.setdefault(spec.env_key, [])
         while len(envs) < n:
-            envs.append(make_env(self.cfg.env_id, spec.controller,
-                                 self.cfg.controller_overrides, spec.preset))
+            envs.append(method_env(self.cfg.env_id, spec, self.cfg.controller_overrides))
         return envs
 
     def _policy(self, method: str) -> Policy:

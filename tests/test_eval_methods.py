@@ -16,10 +16,10 @@ from impact_eval.methods import (
     CHECKPOINTS_ENV_VAR,
     checkpoint_dir,
     env_short_name,
-    load_sb3,
     method_choices,
     resolve_method,
 )
+from impact_eval.sb3 import load_sb3
 
 
 def test_builtin_methods_and_controllers() -> None:
@@ -33,7 +33,8 @@ def test_builtin_methods_and_controllers() -> None:
     for name, controller in expected.items():
         assert resolve_method(name).controller == controller
     assert "sb3:<path.zip>" in method_choices()
-    assert resolve_method("sb3:x.zip").controller == "impedance"
+    assert resolve_method("sb3:x.zip").controller == "impact"
+    assert resolve_method("sb3_impedance:x.zip").controller == "impedance"
     with pytest.raises(InvalidArgumentError, match="valid choices: scripted, scripted_impact"):
         resolve_method("sb3:")
 
@@ -172,3 +173,35 @@ def test_shipped_checkpoint_loads_and_acts_in_its_env(env_name: str, variant: st
 def test_the_paper_benchmarks_ship_vanilla_and_augmented() -> None:
     for env_name in ("hammer", "dumbbell"):
         assert {(env_name, "vanilla"), (env_name, "augmented")} <= set(SHIPPED)
+
+
+def test_sb3_model_trained_on_rl_actions_is_evaluated_in_its_mode(tmp_path, monkeypatch):
+    """A delta-mode SAC on Hammer: the sweep wraps its envs in RLActions(mode="delta") (read
+    from the zip, no unpickling), under IMPACT (sb3:) or impedance (sb3_impedance:); saved
+    VecNormalize statistics normalize its observations."""
+    sb3 = pytest.importorskip("stable_baselines3")
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    from impact_envs.wrappers import RLActions
+    from impact_eval.sb3 import sb3_action_mode
+
+    venv = VecNormalize(DummyVecEnv([lambda: RLActions(gym.make("IMPACT/Hammer-v0"),
+                                                       mode="delta")]), norm_reward=False)
+    model = sb3.SAC("MultiInputPolicy", venv, learning_starts=8, batch_size=8, seed=0,
+                    device="cpu")
+    model.learn(16)
+    zip_path = tmp_path / "sac_delta.zip"
+    model.save(zip_path)
+    venv.save(tmp_path / "vec_normalize.pkl")
+    assert sb3_action_mode(str(zip_path)) == "delta"
+    monkeypatch.setenv("IMPACT_TRUST_SB3", "1")
+    env = RLActions(gym.make("IMPACT/Hammer-v0"), mode="delta")
+    policy = load_sb3(str(zip_path), env)
+    assert policy.vecnormalize is not None
+    obs, _ = env.reset(seed=0)
+    batch = {k: v[None] for k, v in obs.items()}
+    expected, _ = model.predict(policy.vecnormalize.normalize_obs(batch), deterministic=True)
+    np.testing.assert_array_equal(policy.act(batch), expected)
+    for prefix, controller in (("sb3:", "impact"), ("sb3_impedance:", "impedance")):
+        spec = resolve_method(f"{prefix}{zip_path}")
+        assert (spec.controller, spec.action_mode) == (controller, "delta")
