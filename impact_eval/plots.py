@@ -203,12 +203,41 @@ def plot_safety(summary: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
     return _save(fig, out_dir, stem)
 
 
+def plot_heatmap(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
+    """Success as an annotated heatmap: one row per method (the paper's order), one column per
+    parameter value, each cell ``successes/n`` over its rate (colour: rate, red 0 to green 1)."""
+    methods = ordered_methods(summary["method"].unique().tolist())
+    values = np.sort(summary["param_value"].unique())
+    rate = np.full((len(methods), len(values)), np.nan)
+    text = np.full(rate.shape, "", dtype=object)
+    for row in summary.itertuples():
+        i, j = methods.index(row.method), int(np.searchsorted(values, row.param_value))
+        rate[i, j] = row.success_rate
+        text[i, j] = f"{row.successes}/{row.n}\n{row.success_rate:.0%}"
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.62 * len(values) + 2.5),
+                                    max(2.5, 0.55 * len(methods) + 1.4)))
+    image = ax.imshow(rate, cmap="RdYlGn", vmin=0.0, vmax=1.0, aspect="auto")
+    for (i, j), label in np.ndenumerate(text):
+        if label:
+            dark = 0.25 < rate[i, j] < 0.75
+            ax.text(j, i, label, ha="center", va="center", fontsize=7,
+                    color="black" if dark else "white" if rate[i, j] <= 0.25 else "black")
+    ax.set_xticks(range(len(values)), [f"{v:g}" for v in values], fontsize=8)
+    ax.set_yticks(range(len(methods)), [method_label(m) for m in methods], fontsize=8)
+    ax.set_xlabel(param_label(summary))
+    fig.colorbar(image, ax=ax, fraction=0.03, pad=0.02, label="success rate")
+    ax.set_title(f"{summary['env_id'].iloc[0]}: successes / episodes per cell", fontsize=10)
+    fig.tight_layout()
+    return _save(fig, out_dir, "success_heatmap")
+
+
 def plot_all(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
     """Draw every figure into ``out_dir`` (created if needed); returns the files written."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     param = str(summary["param_name"].iloc[0])
     return [
+        *plot_heatmap(summary, out_dir),
         *plot_surface(summary, out_dir),
         *plot_success(summary, out_dir, f"success_vs_{param}"),
         *plot_energy(summary, out_dir, f"energy_vs_{param}"),

@@ -14,6 +14,7 @@ from impact_envs.errors import InvalidArgumentError
 from impact_eval.cli import main
 
 PLOTS = [
+    "success_heatmap",
     "success_surface",
     "success_vs_object_mass",
     "energy_vs_object_mass",
