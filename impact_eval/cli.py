@@ -124,6 +124,13 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         "--episodes): each new cell gets the same episode count",
     )
     p.add_argument(
+        "--video",
+        type=int,
+        default=0,
+        metavar="K",
+        help="write the first K episodes of every cell as MP4 to OUT/videos (imageio-ffmpeg)",
+    )
+    p.add_argument(
         "--beyond-hardware-limits",
         action="store_true",
         help="allow --controller-set limits above the FR3's (87/12 Nm, 1000 Nm/s); recorded "
@@ -222,6 +229,7 @@ def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
         seed=a.seed,
         resume=a.resume,
         extend=a.extend,
+        video_episodes=a.video,
         controller_overrides=tuple(a.controller_set),
         beyond_hardware_limits=a.beyond_hardware_limits,
     )

@@ -53,7 +53,7 @@ def check_env_id(env_id: str) -> str:
 
 
 def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
-             preset: str = "default") -> gym.Env:
+             preset: str = "default", render: bool = False) -> gym.Env:
     """``gym.make(env_id, controller=controller, controller_preset=preset)``, errors turned
     into ``ImpactError``.
 
@@ -76,6 +76,8 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
 
         extra["controller_preset"] = apply_overrides(preset_config(preset), overrides)
     try:
+        if render:
+            extra["render_mode"] = "rgb_array"
         return gym.make(env_id, controller=controller, **extra)
     except ImpactError:
         raise
@@ -180,11 +182,12 @@ def warm_kernels(env: gym.Env) -> None:
         pass
 
 
-def method_env(env_id: str, spec: object, overrides: Sequence[str] = ()) -> gym.Env:
+def method_env(env_id: str, spec: object, overrides: Sequence[str] = (),
+               render: bool = False) -> gym.Env:
     """``make_env`` for a method: its controller and preset, wrapped in
     ``impact_envs.wrappers.RLActions`` when the method acts in one of its modes (an SB3 model
     trained on the wrapper)."""
-    env = make_env(env_id, spec.controller, overrides, spec.preset)
+    env = make_env(env_id, spec.controller, overrides, spec.preset, render)
     if spec.action_mode is None:
         return env
     from impact_envs.wrappers import RLActions

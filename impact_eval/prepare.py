@@ -48,6 +48,8 @@ class SweepRequest:
     controller_overrides: tuple[str, ...] = ()
     extend: bool = False
     """``--extend``: resume, and let methods and grid values grow (``check_resumable``)."""
+    video_episodes: int = 0
+    """``--video K``: the first K episodes of every cell as MP4 (``OUT/videos``)."""
     beyond_hardware_limits: bool = False
     """Allow ``--controller-set`` limits above the FR3's torque and torque-rate limits."""
 
@@ -177,6 +179,12 @@ def prepare(req: SweepRequest) -> Plan:
             raise InvalidArgumentError(
                 f"{'; '.join(above)}: above the FR3's hardware limits (87 Nm x4, 12 Nm x3, "
                 "1000 Nm/s); pass --beyond-hardware-limits to run it anyway (run.json records it)")
+    if req.video_episodes < 0:
+        raise InvalidArgumentError(f"--video must be >= 0, got {req.video_episodes}")
+    if req.video_episodes:
+        from impact_eval.video import require_encoder
+
+        require_encoder()
     values = parse_grid(req.grid)
     check_env_id(req.env_id)  # imports the env's module, which may register methods too
     specs = parse_methods(req.methods)
@@ -202,5 +210,7 @@ def prepare(req: SweepRequest) -> Plan:
         workers=req.workers,
         envs_per_worker=req.envs_per_worker,
         controller_overrides=tuple(req.controller_overrides),
+        video_episodes=req.video_episodes,
+        video_dir=str(req.out / "videos"),
     )
     return Plan(config=config, env=info, out=req.out, done=done, previous_run=previous)

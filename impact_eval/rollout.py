@@ -70,11 +70,14 @@ class LockstepBatch:
     (the diffusion policy then samples chunks only for the envs still running).
     """
 
-    def __init__(self, envs: Sequence[object], policy: Policy, param_name: str, policy_dt: float):
+    def __init__(self, envs: Sequence[object], policy: Policy, param_name: str, policy_dt: float,
+                 videos: dict[int, object] | None = None):
         self.envs = envs
         self.policy = policy
         self.param_name = param_name
         self.policy_dt = policy_dt
+        self.videos = videos or {}
+        """Batch index -> ``video.EpisodeVideo`` of the episodes recorded (``--video``)."""
 
     def run(
         self,
@@ -118,6 +121,7 @@ class LockstepBatch:
             obs, _ = self.envs[i].reset(seed=job.seed, options={self.param_name: job.value})
             if not obs_is_finite(obs):
                 raise SimulationError("non-finite observation after reset")
+            self._record(i)
             return obs
         except Exception as exc:  # noqa: BLE001 - recorded as the episode's failure reason
             self._finish(i, tracker, _crash_reason(exc), on_finish)
@@ -135,6 +139,7 @@ class LockstepBatch:
         try:
             obs, _, terminated, truncated, info = self.envs[i].step(action)
             tracker.update(info)
+            self._record(i)
             if not obs_is_finite(obs):
                 raise SimulationError("non-finite observation")
         except Exception as exc:  # noqa: BLE001 - recorded as the episode's failure reason
@@ -145,11 +150,20 @@ class LockstepBatch:
             self._finish(i, tracker, reason, on_finish)
         return obs
 
+    def _record(self, i: int) -> None:
+        """Add env ``i``'s current frame to its video, if its episode is recorded."""
+        video = self.videos.get(i)
+        if video is not None:
+            video.add(self.envs[i].render())
+
     def _finish(
         self, i: int, tracker: EpisodeTracker, reason: str, on_finish: FinishCallback
     ) -> None:
         """Close episode ``i``, tell the policy (optional ``finish_envs``), report its row."""
         tracker.finish(reason)
+        video = self.videos.pop(i, None)
+        if video is not None:
+            video.close()
         finish_envs = getattr(self.policy, "finish_envs", None)
         if callable(finish_envs):  # optional: stop computing actions that would be discarded
             finish_envs([i])

@@ -13,6 +13,7 @@ import os
 import queue
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 from tqdm import tqdm
 
@@ -47,6 +48,10 @@ class SweepConfig:
     envs_per_worker: int
     controller_overrides: tuple[str, ...] = ()
     """``SECTION.FIELD=VALUE`` changes of the controller config (ablations; empty: paper's)."""
+    video_episodes: int = 0
+    """Record the first this many episodes of every cell as MP4 (``--video``)."""
+    video_dir: str = ""
+    """Where the videos go (``OUT/videos``)."""
 
 
 @dataclass(frozen=True)
@@ -98,7 +103,8 @@ class Worker:
 
         envs = self.envs.setdefault(spec.env_key, [])
         while len(envs) < n:
-            envs.append(method_env(self.cfg.env_id, spec, self.cfg.controller_overrides))
+            envs.append(method_env(self.cfg.env_id, spec, self.cfg.controller_overrides,
+                                   render=self.cfg.video_episodes > 0))
         return envs
 
     def _policy(self, method: str) -> Policy:
@@ -121,9 +127,8 @@ class Worker:
             warm_start = getattr(env.unwrapped, "warm_start", None)  # type: ignore[attr-defined]
             if callable(warm_start):
                 warm_start(snapshot)
-        batch = LockstepBatch(
-            envs, self._policy(task.method), self.cfg.param_name, self.cfg.policy_dt
-        )
+        batch = LockstepBatch(envs, self._policy(task.method), self.cfg.param_name,
+                              self.cfg.policy_dt, self._videos(task))
 
         def on_finish(i: int, metrics: dict[str, object]) -> None:
             job = task.jobs[i]
@@ -140,6 +145,17 @@ class Worker:
             )
 
         batch.run(task.jobs, on_finish, heartbeat)
+
+    def _videos(self, task: Task) -> dict[int, object]:
+        """The task's episodes to record (episode index < ``video_episodes``), by batch index."""
+        if not self.cfg.video_episodes:
+            return {}
+        from impact_eval.video import EpisodeVideo, video_path
+
+        root = Path(self.cfg.video_dir)
+        return {i: EpisodeVideo(video_path(root, task.method, self.cfg.param_name,
+                                           format_value(job.value), job.episode))
+                for i, job in enumerate(task.jobs) if job.episode < self.cfg.video_episodes}
 
     def _warm_snapshot(self, spec: MethodSpec, value: float) -> object:
         """The cell's warm-up snapshot (``warm.warm_up``), computed once per worker."""

@@ -33,11 +33,12 @@ class RobotOptions:
 @dataclass(frozen=True)
 class RenderOptions:
     """Offscreen rendering (``render_mode="rgb_array"``): image size [px] and camera name
-    (``"front"`` or ``"side"``, defined in assets/common.xml)."""
+    (``"overview"``, which frames the arm, the objects and the goal, ``"front"`` or ``"side"``;
+    defined in assets/common.xml)."""
 
     width: int = 320
     height: int = 240
-    camera: str = "front"
+    camera: str = "overview"
 
     def __post_init__(self) -> None:
         if not (self.width >= 1 and self.height >= 1):
