@@ -60,8 +60,8 @@ class HammerEnv(ImpactEnv):
     ``model_mass_error`` relative error of the controller's link masses),
     ``persist_internal_model`` (keep the learned internal model across resets),
     ``terminate_on_success``, ``reward_type`` ("sparse" | "dense"), ``render_mode``
-    ("rgb_array"), ``render`` (``RenderOptions``: ``width``, ``height``, ``camera`` "front" |
-    "side").
+    ("rgb_array"), ``render`` (``RenderOptions``: ``width``, ``height``, ``camera``
+    "overview" (default since 2026-11-25: arm, objects and goal in view) | "front" | "side").
 
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
