@@ -61,13 +61,13 @@ def param_label(summary: pd.DataFrame) -> str:
     return f"{text} [{unit}]" if unit else text
 
 
-def _colors(methods: list[str]) -> dict[str, tuple]:
+def method_colors(methods: list[str]) -> dict[str, tuple]:
     """Stable colour per method (tab10 by position in the paper's order)."""
     cmap = plt.get_cmap("tab10")
     return {m: cmap(i % 10) for i, m in enumerate(ordered_methods(methods))}
 
 
-def _save(fig: plt.Figure, out_dir: Path, stem: str) -> list[Path]:
+def save_figure(fig: plt.Figure, out_dir: Path, stem: str) -> list[Path]:
     """Save ``fig`` as PNG and PDF; returns the paths."""
     paths = []
     for fmt in FORMATS:
@@ -89,7 +89,7 @@ def _bar_width(values: np.ndarray) -> float:
 def plot_surface(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
     """3-D bar chart: parameter × method × success rate (one ``bar3d`` call, correct depth)."""
     methods = ordered_methods(summary["method"].unique().tolist())
-    colors = _colors(methods)
+    colors = method_colors(methods)
     dx, dy = _bar_width(summary["param_value"].to_numpy(float)), 0.45
     rows = summary.assign(j=summary["method"].map(methods.index)).sort_values(["j", "param_value"])
     x = rows["param_value"].to_numpy(float) - dx / 2
@@ -128,7 +128,7 @@ def plot_surface(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
         f"{param_label(summary)}",
         pad=0,
     )
-    return _save(fig, out_dir, "success_surface")
+    return save_figure(fig, out_dir, "success_surface")
 
 
 def _lines(
@@ -141,7 +141,7 @@ def _lines(
 ) -> None:
     """One line per method with an optional band (columns ``low``/``high`` or mean ± std)."""
     methods = ordered_methods(summary["method"].unique().tolist())
-    colors = _colors(methods)
+    colors = method_colors(methods)
     for i, method in enumerate(methods):
         rows = summary[summary["method"] == method].sort_values("param_value")
         x, y = rows["param_value"].to_numpy(float), rows[mean].to_numpy(float)
@@ -175,32 +175,7 @@ def plot_success(summary: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
     n = str(lo) if lo == hi else f"{lo}–{hi}"
     ax.set_title(f"{summary['env_id'].iloc[0]}: success rate (n = {n} episodes per point)")
     ax.legend(fontsize=8, loc="best")
-    return _save(fig, out_dir, stem)
-
-
-def plot_energy(summary: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
-    """Energy per episode vs parameter, mean ± std."""
-    fig, ax = plt.subplots(figsize=(7, 4.2))
-    _lines(ax, summary, "energy_mean_j", None, None, band_std="energy_std_j")
-    ax.set_ylabel(r"energy per episode $\int|\tau\cdot\dot q|\,dt$ [J]")
-    ax.set_title(f"{summary['env_id'].iloc[0]}: energy (mean ± std)")
-    ax.legend(fontsize=8, loc="best")
-    return _save(fig, out_dir, stem)
-
-
-def plot_safety(summary: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
-    """Peak contact force and peak joint torque vs parameter (episode means)."""
-    fig, (ax_f, ax_t) = plt.subplots(1, 2, figsize=(11, 4.2))
-    _lines(ax_f, summary, "peak_contact_force_mean_n", None, None)
-    ax_f.set_ylabel("peak contact force [N]")
-    ax_f.set_title("peak contact force (episode mean)")
-    _lines(ax_t, summary, "peak_torque_mean_nm", None, None)
-    ax_t.set_ylabel("peak joint torque [Nm]")
-    ax_t.set_title("peak joint torque (episode mean)")
-    ax_t.legend(fontsize=8, loc="best")
-    fig.suptitle(f"{summary['env_id'].iloc[0]}: safety")
-    fig.tight_layout()
-    return _save(fig, out_dir, stem)
+    return save_figure(fig, out_dir, stem)
 
 
 def plot_heatmap(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
@@ -228,11 +203,14 @@ def plot_heatmap(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
     fig.colorbar(image, ax=ax, fraction=0.03, pad=0.02, label="success rate")
     ax.set_title(f"{summary['env_id'].iloc[0]}: successes / episodes per cell", fontsize=10)
     fig.tight_layout()
-    return _save(fig, out_dir, "success_heatmap")
+    return save_figure(fig, out_dir, "success_heatmap")
 
 
-def plot_all(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
-    """Draw every figure into ``out_dir`` (created if needed); returns the files written."""
+def plot_all(summary: pd.DataFrame, out_dir: Path, episodes: pd.DataFrame) -> list[Path]:
+    """Draw every figure into ``out_dir`` (created if needed); returns the files written.
+    Energy and safety split the episodes of each cell by outcome (``plots_outcome.py``)."""
+    from impact_eval.plots_outcome import plot_energy, plot_safety
+
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     param = str(summary["param_name"].iloc[0])
@@ -240,6 +218,6 @@ def plot_all(summary: pd.DataFrame, out_dir: Path) -> list[Path]:
         *plot_heatmap(summary, out_dir),
         *plot_surface(summary, out_dir),
         *plot_success(summary, out_dir, f"success_vs_{param}"),
-        *plot_energy(summary, out_dir, f"energy_vs_{param}"),
-        *plot_safety(summary, out_dir, f"safety_vs_{param}"),
+        *plot_energy(episodes, summary, out_dir, f"energy_vs_{param}"),
+        *plot_safety(episodes, summary, out_dir, f"safety_vs_{param}"),
     ]

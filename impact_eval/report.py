@@ -117,10 +117,11 @@ def write_report(out_dir: Path) -> tuple[Path, list[Path]]:
     from impact_eval.plots import plot_all
 
     out_dir = Path(out_dir)
-    summary = summarize(load_episodes(out_dir))
+    episodes = load_episodes(out_dir)
+    summary = summarize(episodes)
     summary_path = out_dir / SUMMARY_CSV
     tmp = summary_path.with_name(SUMMARY_CSV + ".tmp")
     summary.to_csv(tmp, index=False)
     tmp.replace(summary_path)
     (out_dir / "summary.md").write_text(success_table_markdown(summary))
-    return summary_path, plot_all(summary, out_dir / PLOTS_DIR)
+    return summary_path, plot_all(summary, out_dir / PLOTS_DIR, episodes)

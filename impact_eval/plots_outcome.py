@@ -1,0 +1,88 @@
+"""Energy and safety figures with successful and failed episodes apart, mean ± std.
+
+A failed episode is often cheap (nothing was lifted) and a successful one expensive, so a mean
+over both mixes two populations; each cell is drawn once per outcome, with its spread.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import pandas as pd
+
+from impact_eval.plots import (
+    LINESTYLES,
+    MARKERS,
+    method_colors,
+    method_label,
+    ordered_methods,
+    param_label,
+    save_figure,
+)
+
+OUTCOMES = ((True, "successful episodes"), (False, "failed episodes"))
+
+
+def outcome_stats(episodes: pd.DataFrame, column: str) -> pd.DataFrame:
+    """Mean, std and count of ``column`` per (method, param_value, success)."""
+    grouped = episodes.groupby(["method", "param_value", "success"])[column]
+    return grouped.agg(["mean", "std", "count"]).reset_index()
+
+
+def _outcome_lines(ax: plt.Axes, stats: pd.DataFrame, success: bool, methods: list[str]) -> None:
+    """One line per method with a ± std band, for the episodes of one outcome."""
+    colors = method_colors(methods)
+    for i, method in enumerate(methods):
+        rows = stats[(stats["method"] == method) & (stats["success"] == success)]
+        rows = rows.sort_values("param_value")
+        if rows.empty:
+            continue
+        x, y = rows["param_value"].to_numpy(float), rows["mean"].to_numpy(float)
+        std = rows["std"].fillna(0.0).to_numpy(float)
+        ax.plot(x, y, marker=MARKERS[i % len(MARKERS)], ls=LINESTYLES[i % len(LINESTYLES)],
+                ms=3.5, lw=1.5, color=colors[method], label=method_label(method))
+        ax.fill_between(x, y - std, y + std, color=colors[method], alpha=0.15, lw=0)
+    ax.grid(alpha=0.3)
+
+
+def _grid(episodes: pd.DataFrame, summary: pd.DataFrame, columns: list[tuple[str, str]],
+          title: str) -> plt.Figure:
+    """Rows: outcome; columns: the quantities; one legend for the figure."""
+    methods = ordered_methods(episodes["method"].unique().tolist())
+    fig, axes = plt.subplots(len(OUTCOMES), len(columns), squeeze=False,
+                             figsize=(5.2 * len(columns), 6.4), sharex=True)
+    for c, (column, label) in enumerate(columns):
+        stats = outcome_stats(episodes, column)
+        for r, (success, name) in enumerate(OUTCOMES):
+            ax = axes[r][c]
+            _outcome_lines(ax, stats, success, methods)
+            ax.set_title(f"{label}: {name}", fontsize=9)
+            ax.set_ylabel(label, fontsize=8)
+            if r == len(OUTCOMES) - 1:
+                ax.set_xlabel(param_label(summary))
+    handles = {h.get_label(): h for ax in axes.flat for h in ax.get_lines()}
+    fig.legend(list(handles.values()), list(handles), loc="lower center",
+               ncol=min(len(handles), 4), fontsize=8, frameon=False)
+    fig.suptitle(f"{summary['env_id'].iloc[0]}: {title} (mean ± std per cell)", fontsize=10)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    return fig
+
+
+def plot_energy(episodes: pd.DataFrame, summary: pd.DataFrame, out_dir: Path,
+                stem: str) -> list[Path]:
+    """Energy per episode vs parameter, successful and failed episodes apart."""
+    fig = _grid(episodes, summary,
+                [("energy_j", r"energy $\int|\tau\cdot\dot q|\,dt$ [J]")], "energy")
+    return save_figure(fig, out_dir, stem)
+
+
+def plot_safety(episodes: pd.DataFrame, summary: pd.DataFrame, out_dir: Path,
+                stem: str) -> list[Path]:
+    """Peak contact force and peak joint torque, successful and failed episodes apart."""
+    fig = _grid(episodes, summary, [("peak_contact_force_n", "peak contact force [N]"),
+                                    ("peak_torque_nm", "peak joint torque [Nm]")], "safety")
+    return save_figure(fig, out_dir, stem)
+
+
+__all__ = ["outcome_stats", "plot_energy", "plot_safety"]
