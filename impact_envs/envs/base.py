@@ -107,38 +107,20 @@ class ImpactEnv(gym.Env):
         render: RenderOptions | None = None,
         reward_type: str = "sparse",
     ) -> None:
-        self._init_kwargs = {
-            "task": task, "controller": controller, "object_mass": object_mass,
-            "task_params": task_params, "estimator": estimator,
-            "controller_preset": controller_preset, "robot": robot,
-            "persist_internal_model": persist_internal_model,
-            "terminate_on_success": terminate_on_success, "render_mode": render_mode,
-            "render": render, "reward_type": reward_type,
-        }
-        check_choice("controller", controller, CONTROLLERS)
-        check_choice("estimator", estimator, ESTIMATORS)
-        check_choice("reward_type", reward_type, REWARD_TYPES)
-        self.reward_type = reward_type
-        if not isinstance(controller_preset, ControllerConfig):
-            check_choice("controller_preset", controller_preset, PRESETS)
+        self._init_kwargs = {k: v for k, v in locals().items() if k not in ("self", "__class__")}
+        """The constructor's arguments (``__deepcopy__`` and pickling rebuild from them)."""
+        self._check_args(controller, estimator, reward_type, controller_preset, render_mode)
         robot, render = robot or RobotOptions(), render or RenderOptions()
-        if render_mode is not None:
-            check_choice("render_mode", render_mode, self.metadata["render_modes"])
-        self.task = task = self.make_task() if task is None else _load_task(task)
-        self.render_mode = render_mode
+        self.reward_type, self.render_mode = reward_type, render_mode
         self.controller_mode = controller
         self.terminate_on_success = bool(terminate_on_success)
         self.persist_internal_model = bool(persist_internal_model)
+        self.task = task = self.make_task() if task is None else _load_task(task)
         noise = SensorNoise() if robot.sensor_noise else SensorNoise.off()
         self.sim = FrankaSim(task.scene_xml, task.object_bodies,
                              grasp_force_n=robot.grasp_force_n, noise=noise)
         task.bind(self.sim)
-        self._params = {p.name: p.default for p in task.params}
-        if object_mass is not None:
-            self._params[task.param("object_mass").name] = task.param("object_mass").validate(
-                object_mass)
-        for name, value in (task_params or {}).items():
-            self._params[name] = task.param(name).validate(value)
+        self._params = self._initial_params(object_mass, task_params)
         perturbation = ModelPerturbation(link_mass_scale=1.0 + float(robot.model_mass_error))
         self.dynamics = PinocchioArm(perturbation=perturbation)
         cfg, self.controller_preset = _controller_config(controller_preset, estimator)
@@ -147,8 +129,7 @@ class ImpactEnv(gym.Env):
         self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
                                task.before_tick if task.has_tick_hook else None)
         self._warm: ModelSnapshot | None = None
-        self._camera = render.camera
-        self._size = (int(render.height), int(render.width))
+        self._camera, self._size = render.camera, (int(render.height), int(render.width))
         self._renderer: mujoco.Renderer | None = None
         self.action_space = spaces.Box(
             low=np.concatenate([task.workspace_low, -np.ones(7)]).astype(np.float32),
@@ -156,11 +137,31 @@ class ImpactEnv(gym.Env):
             dtype=np.float32,
         )
         self.observation_space = self._make_observation_space()
-        self._step_count = 0
-        self._target_pos = np.zeros(3)
-        self._target_quat = np.array([1.0, 0.0, 0.0, 0.0])
-        self._gripper_cmd = -1.0
-        self._success_once = False
+        self._step_count, self._gripper_cmd, self._success_once = 0, -1.0, False
+        self._target_pos, self._target_quat = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
+
+    def _check_args(self, controller: str, estimator: str, reward_type: str,
+                    controller_preset: str | ControllerConfig, render_mode: str | None) -> None:
+        """One-line errors naming the valid choices."""
+        check_choice("controller", controller, CONTROLLERS)
+        check_choice("estimator", estimator, ESTIMATORS)
+        check_choice("reward_type", reward_type, REWARD_TYPES)
+        if not isinstance(controller_preset, ControllerConfig):
+            check_choice("controller_preset", controller_preset, PRESETS)
+        if render_mode is not None:
+            check_choice("render_mode", render_mode, self.metadata["render_modes"])
+
+    def _initial_params(self, object_mass: float | None,
+                        task_params: dict[str, float] | None) -> dict[str, float]:
+        """The task's defaults, then the ``object_mass`` shorthand, then ``task_params``."""
+        task = self.task
+        params = {p.name: p.default for p in task.params}
+        if object_mass is not None:
+            params[task.param("object_mass").name] = task.param("object_mass").validate(
+                object_mass)
+        for name, value in (task_params or {}).items():
+            params[name] = task.param(name).validate(value)
+        return params
 
     # ------------------------------------------------------------------ spaces
     def _make_observation_space(self) -> spaces.Dict:
