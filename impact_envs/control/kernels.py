@@ -121,13 +121,13 @@ def controller_tick(
     """Everything of ImpactController.compute after ``dynamics.update``; returns status bits.
 
     ``dyn`` is a ``DynamicsArrays`` at (q, dq), ``state`` a ``ControllerState``. Without
-    "run internal model" (mode "impedance") the model is skipped entirely. Inputs out of range
-    return ``BAD_INPUT`` and a zero quaternion ``BAD_QUAT`` before anything is written.
+    "run internal model" (mode "impedance") the model is skipped entirely. The callers check
+    the input ranges first (``first_bad_input``: ``ImpactController.compute`` in Python, the
+    closed loop's ``loop_tick`` in its own call, once per tick); a zero quaternion returns
+    ``BAD_QUAT`` before anything is written.
     """
     ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, imp, lim = state
     par, sig_cmd, w_extra, scalars, w_ff = controller_views(ctl)
-    if first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, gripper_width) >= 0:
-        return BAD_INPUT
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
     shared = par[MAPS_SHARED] != 0.0
