@@ -13,6 +13,11 @@ emit. RL libraries expect a symmetric, normalized box; ``RLActions`` maps one on
   in the world frame, then the gripper. Relative to the previous target, not the measured
   pose, so a sagging load does not make the target drift.
 
+A physics blow-up (a random policy can throw an object faster than the env's velocity check
+allows) ends the episode instead of raising: ``terminated=True``, reward 0 and
+``info["failure_reason"] = "unstable: ..."``, with the last valid observation, so a training
+run goes on with a reset (the base env raises ``SimulationError``, which impact-eval records).
+
 Shipped checkpoints are unaffected (they act on the unwrapped env).
 """
 
@@ -23,7 +28,7 @@ import numpy as np
 from gymnasium import spaces
 
 from impact_envs.control.lie import quat_to_matrix, rot6d_from_matrix, so3_exp
-from impact_envs.errors import check_choice
+from impact_envs.errors import SimulationError, check_choice
 
 ACTION_MODES = ("absolute", "delta")
 
@@ -64,3 +69,18 @@ class RLActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
         out[3:9] = rot6d_from_matrix(turn @ quat_to_matrix(base.target_quat_world))
         out[9] = a[6]
         return out
+
+    def reset(self, **kwargs):  # noqa: ANN003, ANN201 - gymnasium's signature
+        obs, info = self.env.reset(**kwargs)
+        self._last_obs = obs
+        return obs, info
+
+    def step(self, action: np.ndarray):  # noqa: ANN201 - gymnasium's signature
+        """The wrapped env's step on the mapped action; a blow-up ends the episode."""
+        try:
+            obs, reward, terminated, truncated, info = self.env.step(self.action(action))
+        except SimulationError as exc:
+            info = {"is_success": False, "failure_reason": f"unstable: {exc}"}
+            return self._last_obs, 0.0, True, False, info
+        self._last_obs = obs
+        return obs, reward, terminated, truncated, info

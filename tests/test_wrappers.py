@@ -65,3 +65,22 @@ def test_sb3_trains_a_few_hundred_steps(algo):
     model = getattr(sb3, algo)("MultiInputPolicy", env, seed=0, device="cpu", **kwargs)
     model.learn(128)
     env.close()
+
+
+def test_a_physics_blow_up_ends_the_episode_instead_of_raising(monkeypatch):
+    """A PPO run on Disturbance (IMPACT, delta) hit "velocity blow-up" and the raise killed
+    training; the wrapper turns it into a terminated episode with the reason in info."""
+    from impact_envs.errors import SimulationError
+
+    env = RLActions(gym.make("IMPACT/Disturbance-v0"), mode="delta")
+    first, _ = env.reset(seed=0)
+
+    def blow_up(*args, **kwargs):
+        raise SimulationError("velocity blow-up at t=0.610 s")
+
+    monkeypatch.setattr(env.unwrapped, "step", blow_up)
+    obs, reward, terminated, truncated, info = env.step(np.zeros(7, dtype=np.float32))
+    assert (reward, terminated, truncated) == (0.0, True, False)
+    assert info["failure_reason"] == "unstable: velocity blow-up at t=0.610 s"
+    for key in first:
+        np.testing.assert_array_equal(obs[key], first[key])
