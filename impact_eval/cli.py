@@ -94,8 +94,17 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         "--workers",
         type=int,
         default=os.cpu_count() or 1,
-        help="worker processes (default: CPU count; 1 runs in-process)",
+        help="worker processes (default: CPU count; 1 runs in-process); --executor local only",
     )
+    p.add_argument(
+        "--executor",
+        default="local",
+        help="local (worker processes on this machine) | ray (Ray tasks on a cluster, local "
+        "or remote: docs/scale.md; needs pip install -e '.[ray]')",
+    )
+    p.add_argument("--ray-address", default=None, metavar="ADDR",
+                   help="Ray cluster to join, e.g. 10.0.0.1:6379 (default: $RAY_ADDRESS, else "
+                   "a new local Ray instance)")
     p.add_argument(
         "--envs-per-worker",
         type=int,
@@ -232,6 +241,8 @@ def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
         video_episodes=a.video,
         controller_overrides=tuple(a.controller_set),
         beyond_hardware_limits=a.beyond_hardware_limits,
+        executor=a.executor,
+        ray_address=a.ray_address,
     )
     plan = prepare(request)
     t0 = time.perf_counter()

@@ -14,6 +14,7 @@ from pathlib import Path
 from impact_envs.control.config import ControllerConfig, beyond_hardware_limits
 from impact_envs.control.overrides import apply_overrides
 from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_envs.parallel import check_executor
 from impact_eval import csvio, runinfo
 from impact_eval.envs import (
     EnvInfo,
@@ -52,6 +53,10 @@ class SweepRequest:
     """``--video K``: the first K episodes of every cell as MP4 (``OUT/videos``)."""
     beyond_hardware_limits: bool = False
     """Allow ``--controller-set`` limits above the FR3's torque and torque-rate limits."""
+    executor: str = "local"
+    """``--executor``: ``local`` or ``ray``."""
+    ray_address: str | None = None
+    """``--ray-address`` (``--executor ray`` only)."""
 
 
 @dataclass(frozen=True)
@@ -172,6 +177,7 @@ def _build_policies(req: SweepRequest, specs: list[MethodSpec], env_id: str) -> 
 def prepare(req: SweepRequest) -> Plan:
     """Validate a sweep request without creating any file."""
     check_numbers(req)
+    check_executor(req.executor, req.ray_address)
     if req.controller_overrides:  # bad overrides fail here, before any env is built
         overridden = apply_overrides(ControllerConfig(), req.controller_overrides)
         above = beyond_hardware_limits(overridden.limits)
@@ -212,5 +218,7 @@ def prepare(req: SweepRequest) -> Plan:
         controller_overrides=tuple(req.controller_overrides),
         video_episodes=req.video_episodes,
         video_dir=str(req.out / "videos"),
+        executor=req.executor,
+        ray_address=req.ray_address,
     )
     return Plan(config=config, env=info, out=req.out, done=done, previous_run=previous)

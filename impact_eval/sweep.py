@@ -1,4 +1,5 @@
-"""Sweep engine: plan the (method, value, episode) grid and run it on process-parallel workers.
+"""Sweep engine: plan the (method, value, episode) grid and run it on process-parallel workers
+(or on Ray: ``sweep_ray``, ``--executor ray``).
 
 Each worker owns a few envs per controller and one policy per method, and runs tasks of up to
 ``envs_per_worker`` episodes of one (method, value) in lockstep (one batched ``policy.act`` per
@@ -7,17 +8,17 @@ step). Workers stream each finished episode's row to the parent, the only writer
 
 from __future__ import annotations
 
-import contextlib
 import multiprocessing as mp
 import os
 import queue
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from tqdm import tqdm
 
 from impact_envs.errors import ImpactError
+from impact_envs.parallel import single_threaded_children, single_threaded_torch
 from impact_envs.policies.interface import Policy
 from impact_eval.grid import episode_seed, format_value
 from impact_eval.methods import MethodSpec
@@ -52,6 +53,10 @@ class SweepConfig:
     """Record the first this many episodes of every cell as MP4 (``--video``)."""
     video_dir: str = ""
     """Where the videos go (``OUT/videos``)."""
+    executor: str = "local"
+    """``local`` (this machine's processes, ``workers`` of them) or ``ray`` (``sweep_ray``)."""
+    ray_address: str | None = None
+    """Ray cluster to join (``--ray-address``; None: ``$RAY_ADDRESS`` or a new local one)."""
 
 
 @dataclass(frozen=True)
@@ -182,45 +187,6 @@ def _exit_if_orphaned() -> None:
         os._exit(0)
 
 
-THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-"""Thread-count variables read by OpenMP (torch), NumPy's OpenBLAS and MKL when they load."""
-
-
-@contextlib.contextmanager
-def single_threaded_children() -> Iterator[None]:
-    """Processes started inside (and the forkserver, if it starts here) see one thread each.
-
-    NumPy's OpenBLAS sizes its thread pool when NumPy is imported, which in a worker happens
-    while the worker function is unpickled, before any of its code runs; so the variables must
-    already be in the environment the worker inherits. Without them each worker had a second,
-    busy BLAS thread (the internal model's SGD matmuls) competing for the 2 cores.
-    """
-    saved = {k: os.environ.get(k) for k in THREAD_ENV}
-    os.environ.update(dict.fromkeys(THREAD_ENV, "1"))
-    try:
-        yield
-    finally:
-        for key, value in saved.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
-
-
-def single_threaded_torch() -> None:
-    """One intra-op and one inter-op thread for torch in this process.
-
-    The forkserver may have imported torch (one thread per core) before the worker starts, so
-    the variables alone do not suffice. One thread also keeps the network's numerics
-    independent of the machine's core count.
-    """
-    import torch
-
-    torch.set_num_threads(1)
-    with contextlib.suppress(RuntimeError):  # set once per process; fine if already set
-        torch.set_num_interop_threads(1)
-
-
 def _worker_main(cfg: SweepConfig, tasks: mp.Queue, results: mp.Queue) -> None:
     """Worker process: pull tasks until a ``None`` sentinel, stream rows back."""
     single_threaded_torch()
@@ -321,7 +287,11 @@ def run_sweep(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink) -> int:
 
     try:
         n = min(cfg.workers, len(tasks))
-        if n <= 1:
+        if cfg.executor == "ray":
+            from impact_eval.sweep_ray import run_on_ray
+
+            run_on_ray(cfg, tasks, counted)
+        elif n <= 1:
             _run_inline(cfg, tasks, counted)
         else:
             _run_parallel(cfg, tasks, counted, n)

@@ -33,23 +33,14 @@ import impact_envs
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_learn.collect_config import CollectConfig, parse_param_spec
-from impact_learn.collect_run import AttemptSpec, Expert, run_attempts
+from impact_learn.collect_run import (
+    AttemptBatch,
+    EpisodeResult,
+    Expert,
+    attempt_batches,
+    local_batch_results,
+)
 from impact_learn.dataset import EpisodeMeta, ReplayWriter
-
-
-def attempt_seed(base_seed: int, attempt: int) -> int:
-    """Env reset seed of attempt ``attempt``."""
-    return int(np.random.SeedSequence([base_seed, attempt]).generate_state(1)[0])
-
-
-def attempt_param(cfg: CollectConfig, attempt: int) -> float | None:
-    """Randomized parameter of attempt ``attempt`` (None: the env's default)."""
-    if cfg.param_range is not None:
-        rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, attempt, 1]))
-        return float(rng.uniform(*cfg.param_range))
-    if cfg.param_list is not None:
-        return float(cfg.param_list[attempt % len(cfg.param_list)])
-    return cfg.param
 
 
 def default_env_factory(cfg: CollectConfig) -> Callable[[], gym.Env]:
@@ -118,11 +109,15 @@ def collect(
 ) -> int:
     """Collect until ``cfg.episodes`` successful demos are stored; returns the number stored.
 
-    ``env_factory``/``expert_factory`` default to ``gym.make`` and ``make_expert``.
+    ``env_factory``/``expert_factory`` default to ``gym.make`` and ``make_expert`` (with
+    ``executor="ray"`` they travel to the workers, so they must pickle with cloudpickle).
+    Batches of ``n_envs`` attempts run here one after another, or as Ray tasks several at a
+    time; either way their episodes are stored in attempt order, so the store is the same.
     """
     make_env = env_factory or default_env_factory(cfg)
-    envs = [make_env() for _ in range(cfg.n_envs)]
-    expert = (expert_factory or default_expert_factory(cfg))()
+    make_expert = expert_factory or default_expert_factory(cfg)
+    envs = [make_env()]
+    expert = make_expert()  # before the store exists: an expert that cannot be built is bad input
     param_name = getattr(envs[0].unwrapped, "param_name", "object_mass")
     _check_param_values(envs[0], param_name, cfg)
     space = envs[0].observation_space
@@ -130,25 +125,25 @@ def collect(
     writer = _open_store(cfg, obs_dims, store_attrs(cfg, param_name))
     attempts = writer.attempts()
     attempt = max(int(writer.root.attrs.get("n_attempts", 0)), int(attempts.max(initial=-1)) + 1)
+    batches = attempt_batches(cfg, attempt, param_name)
+    if cfg.executor == "ray":
+        from impact_learn.collect_ray import ray_batch_results
+
+        results = ray_batch_results(cfg, make_env, make_expert, batches)
+    else:
+        envs += [make_env() for _ in range(cfg.n_envs - 1)]
+        results = local_batch_results(envs, expert, batches, cfg.post_success_steps)
     bar = tqdm(total=cfg.episodes, initial=writer.n_episodes, disable=not cfg.progress)
     try:
-        while writer.n_episodes < cfg.episodes and attempt < cfg.attempt_limit:
-            ids = list(range(attempt, min(attempt + cfg.n_envs, cfg.attempt_limit)))
-            seeds = [attempt_seed(cfg.seed, k) for k in ids]
-            params = [attempt_param(cfg, k) for k in ids]
-            spec = AttemptSpec(seeds, params, param_name)
-            results = run_attempts(envs[: len(ids)], expert, spec, cfg.post_success_steps)
-            for k, seed, result in zip(ids, seeds, results, strict=True):
-                if writer.n_episodes >= cfg.episodes:
-                    break  # later attempts of this batch do not count (resume redoes them)
-                if result.success:
-                    meta = EpisodeMeta(result.param, seed, True, k)
-                    writer.append_episode(result.obs, result.actions, meta)
-                    bar.update(1)
-                attempt = k + 1
+        while writer.n_episodes < cfg.episodes:
+            item = next(results, None)
+            if item is None:
+                break  # attempt limit reached
+            attempt = _store_batch(writer, cfg.episodes, *item, bar)
             writer.set_attrs(n_attempts=attempt)
             bar.set_postfix(attempts=attempt, success=f"{writer.n_episodes / attempt:.2f}")
     finally:
+        results.close()
         bar.close()
         for env in envs:
             env.close()
@@ -156,6 +151,22 @@ def collect(
     if stored >= cfg.episodes:
         os.replace(writer.path, cfg.out)  # the store appears under --out only when complete
     return stored
+
+
+def _store_batch(writer: ReplayWriter, target: int, batch: AttemptBatch,
+                 results: list[EpisodeResult], bar: tqdm) -> int:
+    """Append the batch's successes in attempt order until ``target`` demos are stored;
+    returns the next attempt index (after the last attempt that counted)."""
+    attempt = batch.ids[0]
+    for k, seed, result in zip(batch.ids, batch.spec.seeds, results, strict=True):
+        if writer.n_episodes >= target:
+            break  # later attempts of this batch do not count (resume redoes them)
+        if result.success:
+            writer.append_episode(result.obs, result.actions,
+                                  EpisodeMeta(result.param, seed, True, k))
+            bar.update(1)
+        attempt = k + 1
+    return attempt
 
 
 def partial_path(out: str | Path) -> Path:
@@ -221,6 +232,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--max-attempts", type=int, help="default: 3 x episodes + n-envs")
     parser.add_argument("--resume", action="store_true", help="append to an existing store")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    parser.add_argument("--executor", default="local",
+                        help="local (this process) | ray (batches as Ray tasks: docs/scale.md)")
+    parser.add_argument("--ray-address", metavar="ADDR",
+                        help="Ray cluster to join (default: $RAY_ADDRESS or a new local one)")
     return parser
 
 
@@ -235,7 +250,10 @@ def main(argv: list[str] | None = None) -> None:
         parser.exit(2, f"impact-collect: error: unknown env {args.env!r}; valid: "
                        f"{', '.join(impact_envs.ENV_IDS)}\n")
     except ImpactError as exc:
-        parser.exit(2, f"impact-collect: error: {exc}\n")
+        from impact_learn.collect_ray import CollectionError
+
+        code = 1 if isinstance(exc, CollectionError) else 2  # a failed run, not bad input
+        parser.exit(code, f"impact-collect: error: {exc}\n")
     if stored < cfg.episodes:
         raise SystemExit(
             f"only {stored}/{cfg.episodes} successful demos after {cfg.attempt_limit} attempts; "
@@ -262,6 +280,8 @@ def config_from_args(args: argparse.Namespace) -> CollectConfig:
         max_attempts=args.max_attempts,
         resume=args.resume,
         progress=not args.no_progress,
+        executor=args.executor,
+        ray_address=args.ray_address,
     )
 
 

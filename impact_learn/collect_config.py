@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_envs.parallel import check_executor
 
 CONTROLLERS = ("impedance", "impact")
 COMPENSATIONS = ("none", "closed_loop", "privileged")
@@ -37,6 +38,9 @@ class CollectConfig:
         max_attempts: Stop after this many attempts; None means ``3 * episodes + n_envs``.
         resume: Append to an existing store, continuing its attempt sequence.
         progress: Show a tqdm bar.
+        executor: ``local`` (this process) or ``ray`` (each batch a Ray task:
+            ``collect_ray``).
+        ray_address: Ray cluster to join (None: ``$RAY_ADDRESS`` or a new local instance).
     """
 
     env_id: str
@@ -53,10 +57,13 @@ class CollectConfig:
     max_attempts: int | None = None
     resume: bool = False
     progress: bool = True
+    executor: str = "local"
+    ray_address: str | None = None
 
     def __post_init__(self) -> None:
         check_choice("controller", self.controller, CONTROLLERS)
         check_choice("compensation", self.compensation, COMPENSATIONS)
+        check_executor(self.executor, self.ray_address)
         given = [x is not None for x in (self.param, self.param_range, self.param_list)]
         if sum(given) > 1:
             raise InvalidArgumentError("give at most one of --mass, --mass-range, --mass-list")

@@ -1,7 +1,8 @@
-"""Run a batch of scripted-expert attempts in lockstep and record their trajectories."""
+"""Collection attempts: their seeds and parameters, in batches run in lockstep, recorded."""
 
 from __future__ import annotations
 
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -9,6 +10,7 @@ import gymnasium as gym
 import numpy as np
 
 from impact_envs.policies.interface import stack_obs
+from impact_learn.collect_config import CollectConfig
 
 
 class Expert(Protocol):
@@ -55,6 +57,14 @@ class AttemptSpec:
     seeds: list[int]
     params: list[float | None]
     param_name: str
+
+
+@dataclass(frozen=True)
+class AttemptBatch:
+    """Consecutive attempts run together: their indices and their reset settings."""
+
+    ids: list[int]
+    spec: AttemptSpec
 
 
 def _reset_all(
@@ -131,3 +141,36 @@ def _result(
         success=success,
         param=float(param),
     )
+
+
+def attempt_seed(base_seed: int, attempt: int) -> int:
+    """Env reset seed of attempt ``attempt``."""
+    return int(np.random.SeedSequence([base_seed, attempt]).generate_state(1)[0])
+
+
+def attempt_param(cfg: CollectConfig, attempt: int) -> float | None:
+    """Randomized parameter of attempt ``attempt`` (None: the env's default)."""
+    if cfg.param_range is not None:
+        rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, attempt, 1]))
+        return float(rng.uniform(*cfg.param_range))
+    if cfg.param_list is not None:
+        return float(cfg.param_list[attempt % len(cfg.param_list)])
+    return cfg.param
+
+
+def attempt_batches(cfg: CollectConfig, first: int, param_name: str) -> Iterator[AttemptBatch]:
+    """Batches of ``n_envs`` consecutive attempts from ``first`` up to the attempt limit."""
+    for start in range(first, cfg.attempt_limit, cfg.n_envs):
+        ids = list(range(start, min(start + cfg.n_envs, cfg.attempt_limit)))
+        spec = AttemptSpec([attempt_seed(cfg.seed, k) for k in ids],
+                           [attempt_param(cfg, k) for k in ids], param_name)
+        yield AttemptBatch(ids, spec)
+
+
+def local_batch_results(
+    envs: list[gym.Env], expert: Expert, batches: Iterator[AttemptBatch], post_success_steps: int
+) -> Generator[tuple[AttemptBatch, list[EpisodeResult]], None, None]:
+    """Run each batch in this process when it is asked for."""
+    for batch in batches:
+        n = len(batch.ids)
+        yield batch, run_attempts(envs[:n], expert, batch.spec, post_success_steps)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import logging
 import os
+from pathlib import Path
 
 import pytest
 
@@ -21,3 +23,20 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip_slow)
+
+
+TESTS = Path(__file__).resolve().parent
+
+
+@pytest.fixture(scope="session")
+def ray_local(tmp_path_factory: pytest.TempPathFactory):
+    """A 2-CPU Ray instance in this process (skipped without the ``[ray]`` extra). Its workers
+    import this directory's modules (the fake env) and see a crash switch directory."""
+    ray = pytest.importorskip("ray")
+    crash_dir = tmp_path_factory.mktemp("ray_crash")
+    env = {"PYTHONPATH": os.pathsep.join([str(TESTS), str(TESTS.parent)]),
+           "IMPACT_FAKE_CRASH_DIR": str(crash_dir)}
+    ray.init(num_cpus=2, include_dashboard=False, logging_level=logging.WARNING,
+             runtime_env={"env_vars": env})
+    yield crash_dir
+    ray.shutdown()

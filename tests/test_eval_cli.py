@@ -161,7 +161,7 @@ def test_param_selects_a_declared_secondary_parameter(tmp_path):
 
 
 def _threads_in_worker(queue) -> None:  # module level: picklable for the worker
-    from impact_eval.sweep import THREAD_ENV, single_threaded_torch
+    from impact_envs.parallel import THREAD_ENV, single_threaded_torch
 
     single_threaded_torch()
     import torch
@@ -170,7 +170,8 @@ def _threads_in_worker(queue) -> None:  # module level: picklable for the worker
 
 
 def test_sweep_workers_are_single_threaded() -> None:
-    from impact_eval.sweep import THREAD_ENV, _context, single_threaded_children
+    from impact_envs.parallel import THREAD_ENV, single_threaded_children
+    from impact_eval.sweep import _context
 
     before = {k: os.environ.get(k) for k in THREAD_ENV}
     ctx = _context()

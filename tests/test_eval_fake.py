@@ -3,7 +3,8 @@
 ``ImpactTest/Fake-v0``: a 1-D "push progress to 1" task whose success at the end depends on the
 object mass (heavier -> less likely) and on the reset seed; the ``impact`` controller has more
 capacity than ``impedance``. Masses 66, 77 and 88 trigger a ``SimulationError``, a
-``RuntimeError`` and a NaN observation at step 3. ``$IMPACT_FAKE_STEP_DELAY`` [s] slows steps.
+``RuntimeError`` and a NaN observation at step 3. ``$IMPACT_FAKE_STEP_DELAY`` [s] slows steps;
+``$IMPACT_FAKE_CRASH_DIR`` holds a one-shot switch that kills the process at step 3.
 
 Import as ``test_eval_fake``; CLI runs use the id ``test_eval_fake:ImpactTest/Fake-v0`` so that
 subprocesses and sweep workers import this module (and its methods) too.
@@ -12,6 +13,7 @@ subprocesses and sweep workers import this module (and its methods) too.
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -29,6 +31,23 @@ ENV_ID = f"test_eval_fake:{BARE_ID}"
 MAX_STEPS = 30
 CAPACITY_KG = {"impedance": 2.0, "impact": 6.0}
 REPO = Path(__file__).resolve().parent.parent
+
+
+CRASH_DIR_ENV = "IMPACT_FAKE_CRASH_DIR"
+"""Directory of the one-shot crash switch (``crash_once_if_armed``)."""
+
+
+def crash_once_if_armed() -> None:
+    """SIGKILL this process once, mid-episode, if ``$IMPACT_FAKE_CRASH_DIR/arm`` exists and
+    ``fired`` does not yet (it is created first): a worker dying for real, once."""
+    root = os.environ.get(CRASH_DIR_ENV)
+    if not root or not (Path(root) / "arm").exists():
+        return
+    try:
+        (Path(root) / "fired").touch(exist_ok=False)
+    except FileExistsError:
+        return
+    os.kill(os.getpid(), signal.SIGKILL)
 
 
 class FakeEnv(gym.Env):
@@ -71,6 +90,8 @@ class FakeEnv(gym.Env):
         self._t += 1
         if delay := float(os.environ.get("IMPACT_FAKE_STEP_DELAY", "0")):
             time.sleep(delay)
+        if self._t == 3:
+            crash_once_if_armed()
         m = self.object_mass
         if self._t == 3 and m == 66:
             raise SimulationError("qacc diverged at t=0.1 s")

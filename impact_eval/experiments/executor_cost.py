@@ -1,0 +1,75 @@
+"""Wall time of the same sweep through ``--executor local`` and ``--executor ray``, in one run.
+
+Run ``python -m impact_eval.experiments.executor_cost --repeats 2 --out /tmp/executor_cost``.
+Each repeat runs the README's main job (``impact-eval --quick``, or the sweep given after
+``--``) once per executor as a fresh process, in the order local, ray, then ray, local in the
+next repeat (so a drift of the machine's speed cancels out). The wall time covers the whole
+command as a user types it: Python start, pre-flight, a new local Ray instance, the sweep,
+the report. Every run's ``episodes.csv`` must be byte-identical (checked); the ratio
+ray / local of each pair and their mean are printed and written to ``OUT/executor_cost.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from impact_envs.cli import OneLineParser
+from impact_envs.errors import ImpactError, InvalidArgumentError
+
+
+def run_once(out: Path, executor: str, sweep: list[str]) -> float:
+    """Wall time [s] of one ``impact-eval`` process writing to ``out``."""
+    cmd = [sys.executable, "-m", "impact_eval", *sweep, "--out", str(out), "--executor", executor]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        tail = " ".join(proc.stderr.split())[-300:]
+        raise ImpactError(f"{' '.join(cmd)} exited {proc.returncode}: {tail}")
+    return wall
+
+
+def measure(out: Path, repeats: int, sweep: list[str]) -> dict[str, object]:
+    """Run the pairs; returns the walls, the ratios and whether the CSVs are identical."""
+    walls: dict[str, list[float]] = {"local": [], "ray": []}
+    csvs = set()
+    for i in range(repeats):
+        order = ("local", "ray") if i % 2 == 0 else ("ray", "local")
+        for executor in order:
+            run_dir = out / f"{executor}_{i}"
+            walls[executor].append(run_once(run_dir, executor, sweep))
+            csvs.add((run_dir / "episodes.csv").read_bytes())
+            print(f"repeat {i} {executor}: {walls[executor][-1]:.1f} s", flush=True)
+    ratios = [r / loc for r, loc in zip(walls["ray"], walls["local"], strict=True)]
+    return {"sweep": sweep, "walls_s": walls, "ratios_ray_over_local": ratios,
+            "mean_ratio": statistics.fmean(ratios), "csv_identical": len(csvs) == 1}
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point (``python -m impact_eval.experiments.executor_cost``)."""
+    parser = OneLineParser(prog="executor_cost", description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=2, help="pairs of runs (default 2)")
+    parser.add_argument("--out", type=Path, required=True, help="directory for the runs")
+    parser.add_argument("sweep", nargs="*", help="impact-eval arguments after -- "
+                        "(default: --quick); --out and --executor are added")
+    args = parser.parse_args(argv)
+    try:
+        if args.repeats < 1:
+            raise InvalidArgumentError(f"--repeats must be >= 1, got {args.repeats}")
+        if args.out.exists():
+            raise InvalidArgumentError(f"--out {args.out} exists; choose a new directory")
+        result = measure(args.out, args.repeats, args.sweep or ["--quick"])
+    except ImpactError as exc:
+        parser.exit(2, f"executor_cost: error: {exc}\n")
+    (args.out / "executor_cost.json").write_text(json.dumps(result, indent=2) + "\n")
+    print(f"ray / local wall: {' '.join(f'{r:.3f}' for r in result['ratios_ray_over_local'])} "
+          f"(mean {result['mean_ratio']:.3f}); episodes.csv identical: {result['csv_identical']}")
+
+
+if __name__ == "__main__":
+    main()
