@@ -7,10 +7,18 @@ next repeat (so a drift of the machine's speed cancels out). The wall time cover
 command as a user types it: Python start, pre-flight, a new local Ray instance, the sweep,
 the report. Every run's ``episodes.csv`` must be byte-identical (checked); the ratio
 ray / local of each pair and their mean are printed and written to ``OUT/executor_cost.json``.
+
+``--estimate EPISODES_CSV --cpus N`` instead predicts a sweep's wall time on N CPUs from a
+finished sweep's episode lengths: its tasks are rebuilt as the sweep builds them (cells cut
+into ``--envs-per-worker`` blocks), each costs its episodes' steps times a measured cost per
+env step and controller (``--step-ms``), and they are handed out in plan order to the CPU that
+is free first, as Ray does. Startup (Ray, workers, kernels) is not included.
 """
 
 from __future__ import annotations
 
+import argparse
+import heapq
 import json
 import statistics
 import subprocess
@@ -50,15 +58,65 @@ def measure(out: Path, repeats: int, sweep: list[str]) -> dict[str, object]:
             "mean_ratio": statistics.fmean(ratios), "csv_identical": len(csvs) == 1}
 
 
+def task_costs(episodes_csv: Path, envs_per_worker: int, step_s: dict[str, float],
+               methods: tuple[str, ...] = ()) -> list[float]:
+    """Cost [s] of each task of the sweep that wrote ``episodes_csv``, in plan order
+    (value-major, then episode block, then method); ``methods`` restricts it."""
+    from impact_eval.csvio import read_rows
+    from impact_eval.methods import resolve_method
+
+    cost: dict[tuple[float, int, str], float] = {}
+    for row in read_rows(episodes_csv):
+        if methods and row["method"] not in methods:
+            continue
+        controller = resolve_method(row["method"]).controller
+        key = (float(row["param_value"]), int(row["episode"]) // envs_per_worker, row["method"])
+        cost[key] = cost.get(key, 0.0) + int(row["length"]) * step_s[controller]
+    return [cost[k] for k in sorted(cost)]
+
+
+def schedule_wall(costs: list[float], cpus: int) -> float:
+    """Finish time of ``costs`` handed out in order, each to the CPU that is free first."""
+    free = [0.0] * cpus
+    for c in costs:
+        heapq.heappush(free, heapq.heappop(free) + c)
+    return max(free)
+
+
+def estimate(args: argparse.Namespace) -> dict[str, object]:
+    """The ``--estimate`` mode's numbers."""
+    step_s = {}
+    for item in args.step_ms.split(","):
+        name, _, ms = item.partition("=")
+        step_s[name.strip()] = float(ms) / 1e3
+    methods = tuple(m for m in (args.methods or "").split(",") if m)
+    costs = task_costs(args.estimate, args.envs_per_worker, step_s, methods)
+    return {"tasks": len(costs), "cpu_s": sum(costs), "longest_task_s": max(costs),
+            "cpus": args.cpus, "wall_s": schedule_wall(costs, args.cpus)}
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point (``python -m impact_eval.experiments.executor_cost``)."""
     parser = OneLineParser(prog="executor_cost", description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=2, help="pairs of runs (default 2)")
-    parser.add_argument("--out", type=Path, required=True, help="directory for the runs")
+    parser.add_argument("--out", type=Path, help="directory for the runs")
+    parser.add_argument("--estimate", type=Path, metavar="EPISODES_CSV",
+                        help="predict that sweep's wall time on --cpus CPUs instead")
+    parser.add_argument("--cpus", type=int, default=160, help="--estimate: CPUs (default 160)")
+    parser.add_argument("--envs-per-worker", type=int, default=20, help="--estimate: batch size")
+    parser.add_argument("--step-ms", default="impact=3.44,impedance=2.38",
+                        help="--estimate: cost of one env step per controller [ms], measured")
+    parser.add_argument("--methods", help="--estimate: only these methods (comma list)")
     parser.add_argument("sweep", nargs="*", help="impact-eval arguments after -- "
                         "(default: --quick); --out and --executor are added")
     args = parser.parse_args(argv)
+    if args.estimate is not None:
+        result = estimate(args)
+        print(json.dumps(result, indent=2))
+        return
     try:
+        if args.out is None:
+            raise InvalidArgumentError("give --out (or --estimate)")
         if args.repeats < 1:
             raise InvalidArgumentError(f"--repeats must be >= 1, got {args.repeats}")
         if args.out.exists():
