@@ -1,0 +1,48 @@
+"""``summary.md`` and ``success.png`` of an ``impact_robosuite.experiment`` run, from its CSV."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+METHOD_LABELS = {"osc": "robosuite OSC_POSE", "impedance": "our impedance", "impact": "IMPACT"}
+
+
+def write_report(out: Path) -> list[Path]:
+    """Write the success table (successes / episodes, mean final lift) and the figure."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    rows = pd.read_csv(out / "episodes.csv")
+    cells = rows.groupby(["task", "method", "mass_kg"]).agg(
+        successes=("success", "sum"), episodes=("success", "size"),
+        final_lift_m=("final_lift_m", "mean")).reset_index()
+    lines = ["| task | mass [kg] | " + " | ".join(METHOD_LABELS.values()) + " |",
+             "|---|---|" + "---|" * len(METHOD_LABELS)]
+    for (task, mass), group in cells.groupby(["task", "mass_kg"]):
+        by = group.set_index("method")
+        items = [f"{int(by.successes[m])}/{int(by.episodes[m])} "
+                 f"({by.final_lift_m[m] * 100:.1f} cm)" if m in by.index else "–"
+                 for m in METHOD_LABELS]
+        lines.append(f"| {task} | {mass:g} | " + " | ".join(items) + " |")
+    summary = out / "summary.md"
+    summary.write_text("Successes / episodes (mean height of the cube above its start at the "
+                       "last step)\n\n" + "\n".join(lines) + "\n")
+    tasks = sorted(cells.task.unique())
+    fig, axes = plt.subplots(1, len(tasks), figsize=(4.2 * len(tasks), 3.4), squeeze=False)
+    for ax, task in zip(axes[0], tasks, strict=True):
+        for method, label in METHOD_LABELS.items():
+            c = cells[(cells.task == task) & (cells.method == method)]
+            if len(c):
+                ax.plot(c.mass_kg, c.successes / c.episodes, "o-", label=label)
+        ax.set(title=f"robosuite {task}, Panda", xlabel="cube mass [kg]",
+               ylabel="success rate", ylim=(-0.05, 1.05))
+        ax.grid(alpha=0.3)
+    axes[0][0].legend(loc="lower left")
+    fig.tight_layout()
+    figure = out / "success.png"
+    fig.savefig(figure, dpi=120)
+    plt.close(fig)
+    return [summary, figure]
