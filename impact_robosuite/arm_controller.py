@@ -7,7 +7,8 @@ without it: our baseline), after ``import impact_robosuite`` (``registry.py``).
 Action: the 6-D delta pose of robosuite's default ``OSC_POSE`` (``[-1, 1]`` scaled to 5 cm and
 0.5 rad, ``input_ref_frame`` "base"), so one policy drives OSC, impedance and IMPACT alike.
 ``goal_update_mode`` "achieved" (robosuite's default) adds the delta to the pose reached,
-"desired" to the previous goal. Each physics step (robosuite's 500 Hz) reads the emulated
+"desired" to the previous goal (kept within ``MAX_LEAD_M`` of the reached position). Each
+physics step (robosuite's 500 Hz) reads the emulated
 sensors (``sensing.py``), updates the MuJoCo-computed arm model (``MujocoArm``) and runs
 ``ImpactController.compute`` with ``dt_s`` set to the model's timestep; the torques come out
 rate-limited and saturated at the FR3's (= Panda's) limits, gravity compensation included.
@@ -31,6 +32,10 @@ from impact_robosuite.sensing import ArmSensors
 OUTPUT_MAX = (0.05, 0.05, 0.05, 0.5, 0.5, 0.5)
 """Largest goal change per policy step [m, rad] (robosuite's OSC_POSE default)."""
 GOAL_UPDATE_MODES = ("achieved", "desired")
+MAX_LEAD_M = 0.10
+"""Farthest the position goal may lead the reached TCP position [m]: in "desired" mode a
+closed-loop policy that keeps pushing against a load would otherwise wind the goal up without
+bound (seen: 10 m away after a few seconds under a 4 kg cube)."""
 
 
 class ImpactArmController(Controller):
@@ -105,7 +110,10 @@ class ImpactArmController(Controller):
         if self.goal_update_mode == "achieved":
             self.goal_pos = rot.T @ (self.ref_pos - pos)
             self.goal_ori = rot.T @ self.ref_ori_mat
-        self.goal_pos = self.goal_pos + delta[:3]
+        achieved = rot.T @ (self.ref_pos - pos)
+        lead = self.goal_pos + delta[:3] - achieved  # bounded: no wind-up of a "desired" goal
+        self.goal_pos = achieved + lead * min(1.0, MAX_LEAD_M / max(float(np.linalg.norm(lead)),
+                                                                    1e-12))
         self.goal_ori = Rotation.from_rotvec(delta[3:]).as_matrix() @ self.goal_ori
 
     def run_controller(self) -> np.ndarray:

@@ -40,13 +40,15 @@ TASKS = {
 }
 
 
-def make_env(task: TaskSpec, method: str, seed: int) -> object:
-    """A seeded robosuite env of ``task`` driven by ``method`` (no rendering)."""
+def make_env(task: TaskSpec, method: str, seed: int, goal_update_mode: str = "achieved") -> object:
+    """A seeded robosuite env of ``task`` driven by ``method`` (no rendering);
+    ``goal_update_mode`` applies to our controllers (OSC keeps robosuite's "achieved")."""
     import robosuite
 
     from impact_robosuite import controller_config
 
-    config = controller_config(method)
+    options = {} if method == "osc" else {"goal_update_mode": goal_update_mode}
+    config = controller_config(method, **options)
     return robosuite.make(task.env_name, robots="Panda", controller_configs=config,
                           has_renderer=False, has_offscreen_renderer=False, use_camera_obs=False,
                           control_freq=20, horizon=task.horizon, seed=seed)
@@ -61,11 +63,12 @@ def set_mass(env: object, body: str, mass_kg: float) -> None:
     env.sim.forward()
 
 
-def run_episode(task: TaskSpec, method: str, mass_kg: float, seed: int) -> dict[str, object]:
+def run_episode(task: TaskSpec, method: str, mass_kg: float, seed: int,
+                goal_update_mode: str = "achieved") -> dict[str, object]:
     """One episode; its CSV row."""
     from impact_robosuite.scripted import PickLift
 
-    env = make_env(task, method, seed)
+    env = make_env(task, method, seed, goal_update_mode)
     try:
         obs = env.reset()
         set_mass(env, task.body, mass_kg)
@@ -108,7 +111,7 @@ def _done(path: Path) -> set[tuple[str, str, float, int]]:
 
 
 def run(out: Path, tasks: list[str], methods: list[str], masses: list[float], seeds: list[int],
-        resume: bool) -> Path:
+        resume: bool, goal_update_mode: str = "achieved") -> Path:
     """Run every missing episode, appending rows; returns the CSV path."""
     path = out / "episodes.csv"
     if path.exists() and not resume:
@@ -122,7 +125,7 @@ def run(out: Path, tasks: list[str], methods: list[str], masses: list[float], se
         for task, method, mass, seed in cells(tasks, methods, masses, seeds):
             if (task.env_name, method, mass, seed) in done:
                 continue
-            writer.writerow(run_episode(task, method, mass, seed))
+            writer.writerow(run_episode(task, method, mass, seed, goal_update_mode))
             f.flush()
             os.fsync(f.fileno())
     return path
@@ -141,6 +144,9 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--masses", default="0.5,2,4", help="comma list of cube masses [kg]")
     p.add_argument("--episodes", type=int, default=20, help="episodes per cell (seeds 0..N-1)")
     p.add_argument("--seed-offset", type=int, default=0, help="first seed")
+    p.add_argument("--goal-update-mode", default="achieved",
+                   help="our controllers' delta reference: achieved (robosuite's default) | "
+                   "desired (OSC stays at achieved)")
     p.add_argument("--resume", action="store_true")
     a = p.parse_args(argv)
     try:
@@ -158,7 +164,10 @@ def main(argv: list[str] | None = None) -> None:
         if a.episodes < 1 or min(masses) <= 0:
             raise InvalidArgumentError("--episodes must be >= 1 and masses > 0")
         seeds = list(range(a.seed_offset, a.seed_offset + a.episodes))
-        path = run(a.out, tasks, methods, masses, seeds, a.resume)
+        if a.goal_update_mode not in ("achieved", "desired"):
+            raise InvalidArgumentError(f"invalid --goal-update-mode {a.goal_update_mode!r}; "
+                                       "valid: achieved, desired")
+        path = run(a.out, tasks, methods, masses, seeds, a.resume, a.goal_update_mode)
     except ImpactError as exc:
         p.exit(2, f"impact_robosuite.experiment: error: {exc}\n")
     print(f"episodes: {path}; report: {', '.join(str(x) for x in write_report(a.out))}")

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+DROP_LIFT_M = 0.04
+"""A failed episode whose cube rose more than this [m] lost it after lifting it."""
 METHOD_LABELS = {"osc": "robosuite OSC_POSE", "impedance": "our impedance", "impact": "IMPACT"}
 
 
@@ -16,20 +18,22 @@ def write_report(out: Path) -> list[Path]:
     import pandas as pd
 
     rows = pd.read_csv(out / "episodes.csv")
+    rows["dropped"] = (rows.success == 0) & (rows.max_lift_m > DROP_LIFT_M)
     cells = rows.groupby(["task", "method", "mass_kg"]).agg(
         successes=("success", "sum"), episodes=("success", "size"),
-        final_lift_m=("final_lift_m", "mean")).reset_index()
+        final_lift_m=("final_lift_m", "median"), dropped=("dropped", "sum")).reset_index()
     lines = ["| task | mass [kg] | " + " | ".join(METHOD_LABELS.values()) + " |",
              "|---|---|" + "---|" * len(METHOD_LABELS)]
     for (task, mass), group in cells.groupby(["task", "mass_kg"]):
         by = group.set_index("method")
         items = [f"{int(by.successes[m])}/{int(by.episodes[m])} "
-                 f"({by.final_lift_m[m] * 100:.1f} cm)" if m in by.index else "–"
-                 for m in METHOD_LABELS]
+                 f"({by.final_lift_m[m] * 100:.1f} cm; {int(by.dropped[m])} dropped)"
+                 if m in by.index else "–" for m in METHOD_LABELS]
         lines.append(f"| {task} | {mass:g} | " + " | ".join(items) + " |")
     summary = out / "summary.md"
-    summary.write_text("Successes / episodes (mean height of the cube above its start at the "
-                       "last step)\n\n" + "\n".join(lines) + "\n")
+    summary.write_text("Successes / episodes (median height of the cube above its start at the "
+                       "last step; failed episodes in which the cube had been lifted more than "
+                       f"{DROP_LIFT_M * 100:.0f} cm, i.e. dropped)\n\n" + "\n".join(lines) + "\n")
     tasks = sorted(cells.task.unique())
     fig, axes = plt.subplots(1, len(tasks), figsize=(4.2 * len(tasks), 3.4), squeeze=False)
     for ax, task in zip(axes[0], tasks, strict=True):
