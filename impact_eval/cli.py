@@ -77,6 +77,7 @@ def sweep_parser() -> argparse.ArgumentParser:
     )
     grid.add_argument("--param-values", dest="grid", metavar="GRID", help="same as --masses")
     _add_run_options(p)
+    _add_executor_options(p)
     return p
 
 
@@ -96,15 +97,6 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         default=os.cpu_count() or 1,
         help="worker processes (default: CPU count; 1 runs in-process); --executor local only",
     )
-    p.add_argument(
-        "--executor",
-        default="local",
-        help="local (worker processes on this machine) | ray (Ray tasks on a cluster, local "
-        "or remote: docs/scale.md; needs pip install -e '.[ray]')",
-    )
-    p.add_argument("--ray-address", default=None, metavar="ADDR",
-                   help="Ray cluster to join, e.g. 10.0.0.1:6379 (default: $RAY_ADDRESS, else "
-                   "a new local Ray instance)")
     p.add_argument(
         "--envs-per-worker",
         type=int,
@@ -152,6 +144,19 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         "ARBITRARY CODE from the file; pass only for files you trust (same as "
         "IMPACT_TRUST_SB3=1)",
     )
+
+
+def _add_executor_options(p: argparse.ArgumentParser) -> None:
+    """Where the sweep's tasks run: this machine's processes or a Ray cluster."""
+    p.add_argument(
+        "--executor",
+        default="local",
+        help="local (worker processes on this machine) | ray (Ray tasks on a cluster, local "
+        "or remote: docs/scale.md; needs pip install -e '.[ray]')",
+    )
+    p.add_argument("--ray-address", default=None, metavar="ADDR",
+                   help="Ray cluster to join, e.g. 10.0.0.1:6379 (default: $RAY_ADDRESS, else "
+                   "a new local Ray instance)")
 
 
 def report_parser() -> argparse.ArgumentParser:
