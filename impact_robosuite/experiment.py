@@ -140,7 +140,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--out", type=Path, required=True)
     p.add_argument("--tasks", default="lift,stack", help=f"comma list of {', '.join(TASKS)}")
     p.add_argument("--methods", default=",".join(METHODS),
-                   help="comma list of osc, impedance, impact")
+                   help="comma list of osc, impedance, impact, impact_paper")
     p.add_argument("--masses", default="0.5,2,4", help="comma list of cube masses [kg]")
     p.add_argument("--episodes", type=int, default=20, help="episodes per cell (seeds 0..N-1)")
     p.add_argument("--seed-offset", type=int, default=0, help="first seed")

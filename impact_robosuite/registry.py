@@ -20,9 +20,10 @@ from impact_robosuite.arm_controller import ImpactArmController
 CONTROLLER_TYPES = {"IMPACT": "impact", "IMPACT_IMPEDANCE": "impedance"}
 """robosuite ``type`` -> our controller mode."""
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
-METHODS = ("osc", "impedance", "impact")
+METHODS = ("osc", "impedance", "impact", "impact_paper")
 """What ``controller_config`` builds: robosuite's default OSC_POSE, ours without and with the
-internal model."""
+internal model (``default`` preset), and IMPACT with the paper's table read literally
+(``paper`` preset, docs/controller.md)."""
 
 _ACCEPTED = set(inspect.signature(ImpactArmController.__init__).parameters) - {"self", "mode"}
 
@@ -51,9 +52,12 @@ def controller_config(method: str, robot: str = "Panda", **arm_options: object) 
     from robosuite import load_composite_controller_config
 
     check_choice("method", method, METHODS)
-    path = None if method == "osc" else str(CONFIG_DIR / f"{method}.json")
+    name = "impact" if method == "impact_paper" else method
+    path = None if method == "osc" else str(CONFIG_DIR / f"{name}.json")
     config = load_composite_controller_config(controller=path, robot=robot)
     arm = config["body_parts"]["right"]
+    if method == "impact_paper":
+        arm["preset"] = "paper"
     unknown = set(arm_options) - _ACCEPTED - {"gripper"}
     if method != "osc" and unknown:
         raise InvalidArgumentError(f"unknown arm options {sorted(unknown)}; valid: "

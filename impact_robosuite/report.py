@@ -6,7 +6,8 @@ from pathlib import Path
 
 DROP_LIFT_M = 0.04
 """A failed episode whose cube rose more than this [m] lost it after lifting it."""
-METHOD_LABELS = {"osc": "robosuite OSC_POSE", "impedance": "our impedance", "impact": "IMPACT"}
+METHOD_LABELS = {"osc": "robosuite OSC_POSE", "impedance": "our impedance", "impact": "IMPACT",
+                 "impact_paper": "IMPACT (paper preset)"}
 
 
 def write_report(out: Path) -> list[Path]:

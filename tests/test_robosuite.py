@@ -36,6 +36,21 @@ def test_the_config_selects_the_controller(method, cls, mode):
         env.close()
 
 
+@pytest.mark.parametrize("method, preset", [("impact", "default"), ("impact_paper", "paper")])
+def test_the_preset_reaches_the_controller(method, preset):
+    import dataclasses
+
+    from impact_envs.control.presets import preset_config
+
+    env = make_env(TASKS["lift"], method, SEED)
+    try:
+        env.reset()
+        config = _arm(env).core.config
+        assert config == dataclasses.replace(preset_config(preset), dt_s=config.dt_s)
+    finally:
+        env.close()
+
+
 def test_bad_options_are_one_line_errors():
     with pytest.raises(InvalidArgumentError, match="valid choices"):
         controller_config("mpc")
