@@ -58,6 +58,21 @@ def test_bad_options_are_one_line_errors():
         controller_config("impact", stiffness=5)
 
 
+@pytest.mark.parametrize("argv, message", [
+    (["--methods", "mpc"], "unknown method 'mpc'"), (["--tasks", "door"], "unknown task"),
+    (["--masses", "x"], "--masses must be numbers"),
+    (["--goal-update-mode", "up"], "invalid --goal-update-mode"),
+    (["--episodes", "0"], "--episodes must be >= 1")])
+def test_experiment_bad_input_is_one_line_and_writes_nothing(argv, message, tmp_path, capsys):
+    from impact_robosuite.experiment import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--out", str(tmp_path / "out"), *argv])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1 and message in err
+    assert not (tmp_path / "out").exists()
+
+
 def test_emulated_torque_sensor_reads_the_holding_torque():
     """Arm at rest: the link-side reading equals the model's gravity torque within the
     unsensed joint friction (frictionloss 0.1 Nm) and the noise."""

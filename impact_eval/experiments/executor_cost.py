@@ -84,13 +84,26 @@ def schedule_wall(costs: list[float], cpus: int) -> float:
 
 
 def estimate(args: argparse.Namespace) -> dict[str, object]:
-    """The ``--estimate`` mode's numbers."""
+    """The ``--estimate`` mode's numbers (bad input: ``InvalidArgumentError``)."""
     step_s = {}
     for item in args.step_ms.split(","):
         name, _, ms = item.partition("=")
-        step_s[name.strip()] = float(ms) / 1e3
+        try:
+            step_s[name.strip()] = float(ms) / 1e3
+        except ValueError:
+            raise InvalidArgumentError(
+                f"--step-ms must be CONTROLLER=MS,..., got {args.step_ms!r}") from None
+    if args.cpus < 1 or args.envs_per_worker < 1:
+        raise InvalidArgumentError("--cpus and --envs-per-worker must be >= 1")
+    if not args.estimate.is_file():
+        raise InvalidArgumentError(f"--estimate {args.estimate} is not a file")
     methods = tuple(m for m in (args.methods or "").split(",") if m)
-    costs = task_costs(args.estimate, args.envs_per_worker, step_s, methods)
+    try:
+        costs = task_costs(args.estimate, args.envs_per_worker, step_s, methods)
+    except KeyError as exc:
+        raise InvalidArgumentError(f"no --step-ms for controller {exc}") from None
+    if not costs:
+        raise InvalidArgumentError(f"no episodes of {methods or 'any method'} in {args.estimate}")
     return {"tasks": len(costs), "cpu_s": sum(costs), "longest_task_s": max(costs),
             "cpus": args.cpus, "wall_s": schedule_wall(costs, args.cpus)}
 
@@ -110,11 +123,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("sweep", nargs="*", help="impact-eval arguments after -- "
                         "(default: --quick); --out and --executor are added")
     args = parser.parse_args(argv)
-    if args.estimate is not None:
-        result = estimate(args)
-        print(json.dumps(result, indent=2))
-        return
     try:
+        if args.estimate is not None:
+            print(json.dumps(estimate(args), indent=2))
+            return
         if args.out is None:
             raise InvalidArgumentError("give --out (or --estimate)")
         if args.repeats < 1:
