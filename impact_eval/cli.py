@@ -52,7 +52,9 @@ def sweep_parser() -> argparse.ArgumentParser:
         prog=PROG,
         description="Sweep methods over an env parameter (e.g. object mass); "
         "writes episodes.csv, summary.csv, run.json and plots/. "
-        f"'{PROG} report DIR' redraws a finished sweep from its CSV.",
+        f"'{PROG} report DIR' redraws a finished sweep from its CSV; "
+        f"'{PROG} reproduce --check TABLE' reruns a reference table of results/ and compares "
+        "it byte for byte.",
     )
     p.add_argument(
         "--quick",
@@ -287,6 +289,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if argv and argv[0] == "report":
             return run_report(argv[1:])
+        if argv and argv[0] == "reproduce":
+            from impact_eval.reproduce import main as run_reproduce
+
+            return run_reproduce(argv[1:])
         return run_sweep_command(argv)
     except ImpactError as exc:
         from impact_eval.sweep import SweepError

@@ -57,8 +57,10 @@ def test_first_observation_is_repeated():
     assert not torch.equal(policy._history[:, 0], policy._history[:, 1])
 
 
-def test_noise_per_env_is_independent_of_batch():
+@pytest.mark.parametrize("batch_invariant", [True, False])
+def test_noise_per_env_is_independent_of_batch(batch_invariant):
     policy = random_policy(SMALL)
+    policy.batch_invariant = batch_invariant  # False: one batched call (equal to round-off)
     alone = _rollout(policy, batch=1, steps=9)[:, 0]
     policy.reset(3)
     obs_seq = [_obs(policy, 3, t) for t in range(9)]
@@ -194,3 +196,60 @@ def test_bench_prints_policy_cost_next_to_env_cost(capsys, monkeypatch):
     bench_main(["--batch", "4", "--cycles", "1"])
     out = capsys.readouterr().out
     assert "IMPACT/Hammer-v0 env.step" in out and "policy cost / env cost:" in out
+
+
+def _shipped_policy() -> DiffusionPolicy:
+    from impact_eval.methods import checkpoint_dir
+
+    return DiffusionPolicy.load(checkpoint_dir("IMPACT/Hammer-v0", "vanilla"))
+
+
+@pytest.mark.parametrize("batch,slot,threads", [(3, 2, 1), (5, 0, 2), (17, 9, 1)])
+def test_actions_are_bit_identical_for_any_batch_slot_and_thread_count(batch, slot, threads):
+    """An env's actions are a function of its own observations and seed, to the last bit:
+    alone, or in any slot of a larger batch (other envs see other observations), whatever
+    the caller's torch thread count (torch rounds batched and multi-threaded kernels
+    differently, so the policy denoises each env alone on one thread)."""
+    policy = _shipped_policy()
+    steps = 9  # two replanning steps (Ta = 8)
+    policy.reset(1)
+    policy.seed_envs([1234])
+    alone = np.stack([policy.act(_obs(policy, 1, t)) for t in range(steps)])[:, 0]
+    before = torch.get_num_threads()
+    torch.set_num_threads(threads)
+    try:
+        policy.reset(batch)
+        seeds = [1000 + i for i in range(batch)]
+        seeds[slot] = 1234
+        policy.seed_envs(seeds)
+        rows = []
+        for t in range(steps):
+            obs = _obs(policy, batch, 100 + t)
+            for k in obs:
+                obs[k][slot] = _obs(policy, 1, t)[k][0]
+            rows.append(policy.act(obs)[slot])
+    finally:
+        torch.set_num_threads(before)
+    np.testing.assert_array_equal(np.stack(rows), alone)
+    assert torch.get_num_threads() == before  # the caller's thread count is restored
+
+
+def test_frozen_unet_equals_the_eager_network_or_falls_back(monkeypatch):
+    from impact_envs.policies.diffusion import inference
+
+    policy = _shipped_policy()
+    cond_dim = policy.cfg.n_obs_steps * policy.normalizer.obs.dim
+    args = (policy.net, policy.cfg.horizon, 10, cond_dim)
+    with torch.inference_mode():
+        fast = inference.frozen_unet(*args)
+        gen = torch.Generator().manual_seed(7)
+        sample, cond = torch.randn(1, policy.cfg.horizon, 10, generator=gen), torch.randn(
+            1, cond_dim, generator=gen)
+        for step in (torch.tensor(3), torch.tensor(80)):
+            assert torch.equal(fast(sample, step, cond), policy.net(sample, step, cond))
+
+        def broken(*_args, **_kwargs):
+            raise RuntimeError("no TorchScript here")
+
+        monkeypatch.setattr(torch.jit, "trace", broken)
+        assert inference.frozen_unet(*args) is policy.net

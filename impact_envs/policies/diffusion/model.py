@@ -7,6 +7,8 @@ All tensors here live in normalized space (see normalizer.py).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import torch
 from diffusers import DDIMScheduler, DDPMScheduler
 
@@ -85,9 +87,14 @@ def diffusion_loss(
 
 @torch.no_grad()
 def denoise(
-    net: ConditionalUnet1D, scheduler: DDIMScheduler, obs: torch.Tensor, noise: torch.Tensor
+    net: Callable[[torch.Tensor, torch.Tensor, torch.Tensor], torch.Tensor],
+    scheduler: DDIMScheduler,
+    obs: torch.Tensor,
+    noise: torch.Tensor,
 ) -> torch.Tensor:
     """Run the reverse process from ``noise`` ``(B, Tp, 10)`` given ``obs`` ``(B, To, D)``.
+
+    ``net`` is the U-Net or a traced copy of it (``inference.frozen_unet``).
 
     Returns:
         Normalized action sequence ``(B, Tp, 10)``.

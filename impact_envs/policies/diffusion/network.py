@@ -129,8 +129,9 @@ class ConditionalUnet1D(nn.Module):
             Prediction ``(B, T, A)``.
         """
         x = sample.transpose(1, 2)  # (B, A, T)
-        steps = torch.as_tensor(timestep, device=sample.device).reshape(-1)
-        steps = steps.expand(sample.shape[0])
+        if not isinstance(timestep, torch.Tensor):  # a tensor stays an input when traced
+            timestep = torch.as_tensor(timestep, device=sample.device)
+        steps = timestep.reshape(-1).expand(sample.shape[0])
         cond = torch.cat([self.step_encoder(steps), global_cond], dim=-1)
         skips = []
         for block1, block2, downsample in self.down:

@@ -6,16 +6,20 @@ Timing per env (To = 2, Tp = 16, Ta = 8)::
     prediction: |a_{t-1} a_t a_{t+1} ... a_{t+14}|   Tp actions, index To-1 is "now"
     executed:         |a_t ... a_{t+7}|        Ta actions, one per ``act`` call
 
-All envs whose action queue is empty are replanned in one batched DDIM call. The initial noise
-of env i comes from its own generator, seeded by ``(seed, i)`` at ``reset`` or by
-``(seed, episode seed)`` with ``seed_envs``, so a rollout is reproducible and does not depend
-on which other envs replan at the same step (DDIM with eta = 0 draws no further noise).
+Every env whose action queue is empty is replanned by its own DDIM call (batch of one, one
+torch thread). The initial noise of env i comes from its own generator, seeded by ``(seed, i)``
+at ``reset`` or by ``(seed, episode seed)`` with ``seed_envs`` (DDIM with eta = 0 draws no
+further noise). An env's actions are then bit-for-bit a function of its own observations and
+seed: torch's CPU kernels round differently for different batch sizes and thread counts
+(docs/results.md, "Reproducibility"), so a batched call would make a rollout depend on how many
+other envs replanned with it, i.e. on ``--envs-per-worker``, the worker count and resumption.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +30,7 @@ from safetensors.torch import load_file, save_file
 import impact_envs
 from impact_envs.errors import CheckpointError, InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
+from impact_envs.policies.diffusion.inference import UNetForward, frozen_unet
 from impact_envs.policies.diffusion.model import denoise, make_inference_scheduler, make_network
 from impact_envs.policies.diffusion.network import ConditionalUnet1D
 from impact_envs.policies.diffusion.normalizer import Normalizer
@@ -38,6 +43,23 @@ META_FILE = "meta.json"
 CHECKPOINT_FORMAT = 1
 GRIPPER_DIM = 9
 """Index of the gripper command (−1 open … +1 closed) in the 10-d action."""
+
+
+@contextlib.contextmanager
+def one_torch_thread() -> Iterator[None]:
+    """Run the block with one torch intra-op thread, then restore the caller's count.
+
+    The network's numerics depend on the thread count (reductions are split per thread), so
+    the policy fixes it instead of inheriting whatever the calling process uses.
+    """
+    threads = torch.get_num_threads()
+    if threads != 1:
+        torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        if threads != 1:
+            torch.set_num_threads(threads)
 
 
 def env_generator(seed: int, *keys: int) -> torch.Generator:
@@ -56,6 +78,11 @@ class DiffusionPolicy:
         obs_dims: ``{obs_key: d_key}`` for ``cfg.obs_keys`` (order given by ``cfg.obs_keys``).
         seed: Seed of the sampling noise; reapplied at every ``reset``.
         meta: Free-form JSON-serialisable training information (saved in meta.json).
+        batch_invariant: True (default, and what impact-eval uses): every env is denoised
+            alone, so its actions do not depend on which other envs replan with it. False:
+            one batched DDIM call for all replanning envs, about 2-5x cheaper per env for
+            5-20 envs but rounded differently for every batch size (results then depend on
+            ``--envs-per-worker`` and on resumption; docs/results.md, "Reproducibility").
     """
 
     def __init__(
@@ -67,6 +94,7 @@ class DiffusionPolicy:
         *,
         seed: int = 0,
         meta: Mapping[str, Any] | None = None,
+        batch_invariant: bool = True,
     ) -> None:
         missing = [k for k in cfg.obs_keys if k not in obs_dims]
         if missing:
@@ -79,8 +107,10 @@ class DiffusionPolicy:
             raise InvalidArgumentError("normalizer obs dim does not match obs_dims")
         self.seed = seed
         self.meta = dict(meta or {})
+        self.batch_invariant = bool(batch_invariant)
         self.scheduler = make_inference_scheduler(cfg)
         self.n_envs = 0
+        self._unet_one: UNetForward | None = None  # built at the first batch-of-one call
 
     def reset(self, n_envs: int) -> None:
         """Clear history and action queues of ``n_envs`` envs and reseed their noise."""
@@ -156,24 +186,40 @@ class DiffusionPolicy:
         self._fresh[:] = False
 
     def predict_chunk(self, envs: np.ndarray) -> np.ndarray:
-        """Sample and return the ``(len(envs), Ta, 10)`` actions to execute for ``envs``."""
-        cfg = self.cfg
-        noise = torch.stack(
-            [torch.randn(cfg.horizon, ACTION_DIM, generator=self._generators[i]) for i in envs]
-        )
-        obs = self.normalizer.obs.forward(self._history[torch.as_tensor(envs)])
-        with torch.inference_mode():
-            sample = denoise(self.net, self.scheduler, obs, noise)
+        """Sample and return the ``(len(envs), Ta, 10)`` actions to execute for ``envs``.
+
+        Each env is denoised alone (batch of one, one thread) unless ``batch_invariant`` is
+        False: see the module docstring.
+        """
+        with one_torch_thread(), torch.inference_mode():
+            if self.batch_invariant:
+                sample = torch.cat([self._denoise(np.array([i]), self._unet()) for i in envs])
+            else:
+                sample = self._denoise(envs, self.net)
         actions = self.normalizer.action.inverse(sample)
         # clip_sample keeps positions in the demos' range and rot6d in [-1, 1]; a gripper
         # channel that was constant in the demos can land a little outside [-1, 1]
         grip = actions[..., GRIPPER_DIM]
-        if cfg.binary_gripper:
+        if self.cfg.binary_gripper:
             actions[..., GRIPPER_DIM] = torch.where(grip > 0.0, 1.0, -1.0)
         else:
             grip.clamp_(-1.0, 1.0)
-        start = cfg.n_obs_steps - 1
-        return actions[:, start : start + cfg.n_action_steps].numpy().astype(np.float32)
+        start = self.cfg.n_obs_steps - 1
+        return actions[:, start : start + self.cfg.n_action_steps].numpy().astype(np.float32)
+
+    def _denoise(self, envs: np.ndarray, net: UNetForward) -> torch.Tensor:
+        """Normalized ``(len(envs), Tp, 10)`` action sequences, one call, each env's noise."""
+        shape = (self.cfg.horizon, ACTION_DIM)
+        noise = torch.stack([torch.randn(shape, generator=self._generators[i]) for i in envs])
+        obs = self.normalizer.obs.forward(self._history[torch.as_tensor(envs)])
+        return denoise(net, self.scheduler, obs, noise)
+
+    def _unet(self) -> UNetForward:
+        """The batch-of-one network: frozen when that is bit-identical (inference.py)."""
+        if self._unet_one is None:
+            cond_dim = self.cfg.n_obs_steps * self.normalizer.obs.dim
+            self._unet_one = frozen_unet(self.net, self.cfg.horizon, ACTION_DIM, cond_dim)
+        return self._unet_one
 
     def save(self, directory: str | Path) -> None:
         """Write model.safetensors, config.json, normalizer.safetensors and meta.json."""
@@ -193,8 +239,13 @@ class DiffusionPolicy:
         (path / META_FILE).write_text(json.dumps(meta, indent=2) + "\n")
 
     @classmethod
-    def load(cls, directory: str | Path, *, seed: int = 0) -> DiffusionPolicy:
-        """Load a checkpoint written by ``save``; raises CheckpointError if missing or corrupt."""
+    def load(
+        cls, directory: str | Path, *, seed: int = 0, batch_invariant: bool = True
+    ) -> DiffusionPolicy:
+        """Load a checkpoint written by ``save``; raises CheckpointError if missing or corrupt.
+
+        ``seed`` and ``batch_invariant`` as in the constructor.
+        """
         path = Path(directory)
         for name in (MODEL_FILE, CONFIG_FILE, NORMALIZER_FILE, META_FILE):
             if not (path / name).is_file():
@@ -213,7 +264,8 @@ class DiffusionPolicy:
             summary = str(exc).splitlines()[0]
             raise CheckpointError(f"{path / MODEL_FILE} does not match config: {summary}") from None
         try:
-            return cls(cfg, net, normalizer, obs_dims, seed=seed, meta=meta)
+            return cls(cfg, net, normalizer, obs_dims, seed=seed, meta=meta,
+                       batch_invariant=batch_invariant)
         except InvalidArgumentError as exc:
             raise CheckpointError(f"checkpoint {path} is inconsistent: {exc}") from None
 
