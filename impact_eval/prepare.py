@@ -113,7 +113,7 @@ def check_out_dir(out: Path) -> None:
 def load_done(req: SweepRequest, env: EnvInfo, values: list[float]) -> set[csvio.EpisodeKey]:
     """Cells already in ``episodes.csv`` (``--resume``), checked against this grid's seeds."""
     path = req.out / EPISODES_CSV
-    if not path.exists():
+    if not path.exists() or path.stat().st_size == 0:  # 0 bytes: the writer starts it afresh
         return set()
     if not (req.resume or req.extend):
         raise InvalidArgumentError(
@@ -129,7 +129,13 @@ def load_done(req: SweepRequest, env: EnvInfo, values: list[float]) -> set[csvio
                 f"cannot resume: {path} holds {row['env_id']}/{row['param_name']} episodes"
             )
         vi = index.get(key[1])
-        if vi is not None and int(row["seed"]) != episode_seed(req.seed, vi, key[2]):
+        try:
+            seed = int(row["seed"])
+        except ValueError:
+            raise InvalidArgumentError(
+                f"cannot resume: {path} has a row with seed {row['seed']!r} (episode {key}); "
+                "fix or delete that row") from None
+        if vi is not None and seed != episode_seed(req.seed, vi, key[2]):
             raise InvalidArgumentError(
                 f"cannot resume: seeds in {path} do not match this grid and --seed "
                 "(was the grid changed?); use the original arguments or another --out"
