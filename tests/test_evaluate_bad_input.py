@@ -114,3 +114,29 @@ def test_every_episode_crashing_is_reported(tmp_path: Path) -> None:
         evaluate(**{**GOOD, "policy": Broken(0.0)}, out=tmp_path / "out")
     assert (tmp_path / "out" / "episodes.csv").exists()  # the rows are kept
 
+
+
+class Interrupting(FakePolicy):
+    """Raises KeyboardInterrupt (a user's Ctrl-C) at its ``stop_at``-th act call."""
+
+    def __init__(self, push: float, stop_at: int) -> None:
+        super().__init__(push)
+        self.calls, self.stop_at = 0, stop_at
+
+    def act(self, obs):
+        self.calls += 1
+        if self.calls == self.stop_at:
+            raise KeyboardInterrupt
+        return super().act(obs)
+
+
+def test_an_interrupted_evaluate_resumes_to_the_same_bytes(tmp_path: Path) -> None:
+    args = {**GOOD, "values": [0.5, 1.0, 3.0], "episodes": 3}
+    evaluate(**args, out=tmp_path / "full")
+    with pytest.raises(KeyboardInterrupt):
+        evaluate(**{**args, "policy": Interrupting(0.9, stop_at=45)}, out=tmp_path / "cut")
+    written = (tmp_path / "cut" / "episodes.csv").read_text().count("\n") - 1
+    assert 0 < written < 9  # stopped mid-run, rows of finished episodes kept
+    evaluate(**args, out=tmp_path / "cut", resume=True)
+    assert (tmp_path / "cut" / "episodes.csv").read_bytes() == (
+        tmp_path / "full" / "episodes.csv").read_bytes()
