@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import socket
 from collections.abc import Iterator
 from types import ModuleType
 
@@ -87,6 +88,34 @@ def check_executor(executor: str, ray_address: str | None) -> None:
         raise InvalidArgumentError("--ray-address needs --executor ray")
     if executor == "ray":
         import_ray()
+        address = ray_address if ray_address is not None else os.environ.get("RAY_ADDRESS")
+        if address:
+            probe_ray_address(address)
+
+
+RAY_PROBE_TIMEOUT_S = 5.0
+"""How long ``probe_ray_address`` waits for the cluster's port to accept a connection."""
+
+
+def probe_ray_address(address: str, timeout_s: float = RAY_PROBE_TIMEOUT_S) -> None:
+    """One-line error unless ``HOST:PORT`` (or ``ray://HOST:PORT``) accepts a TCP connection
+    within ``timeout_s``: checked before any output exists, as ``ray.init`` would otherwise
+    retry for minutes. ``auto`` and ``local`` are left to Ray (it answers at once)."""
+    if address in ("auto", "local"):
+        return
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise InvalidArgumentError(
+            f"invalid Ray address {address!r}; valid: HOST:PORT (e.g. 10.0.0.1:6379), "
+            "ray://HOST:PORT, auto or local")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
+            pass
+    except OSError as exc:
+        raise InvalidArgumentError(
+            f"cannot reach the Ray cluster at {address} within {timeout_s:g} s "
+            f"({type(exc).__name__}: {exc.strerror or exc}); start it (ray start --head) or "
+            "fix --ray-address / $RAY_ADDRESS") from None
 
 
 def ray_task_options() -> dict[str, object]:

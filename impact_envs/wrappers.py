@@ -28,9 +28,16 @@ import numpy as np
 from gymnasium import spaces
 
 from impact_envs.control.lie import quat_to_matrix, rot6d_from_matrix, so3_exp
-from impact_envs.errors import SimulationError, check_choice
+from impact_envs.errors import InvalidArgumentError, SimulationError, check_choice
 
 ACTION_MODES = ("absolute", "delta")
+
+
+def _check_positive_finite(name: str, value: object) -> None:
+    """One-line error unless ``value`` is a finite real number > 0 (bools refused)."""
+    ok = isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
+    if not ok or not (np.isfinite(float(value)) and float(value) > 0.0):
+        raise InvalidArgumentError(f"invalid {name} {value!r}; valid: a finite number > 0")
 
 
 class RLActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
@@ -46,18 +53,28 @@ class RLActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
     def __init__(self, env: gym.Env, mode: str = "absolute", max_step_m: float = 0.02,
                  max_turn_rad: float = 0.1) -> None:
         check_choice("action mode", mode, ACTION_MODES)
+        task = getattr(getattr(env, "unwrapped", None), "task", None)
+        if not hasattr(task, "workspace_low"):
+            raise InvalidArgumentError(
+                f"RLActions wraps an IMPACT env (gym.make('IMPACT/Hammer-v0', ...)), got "
+                f"{getattr(getattr(env, 'spec', None), 'id', None) or type(env).__name__}")
+        for name, value in (("max_step_m", max_step_m), ("max_turn_rad", max_turn_rad)):
+            _check_positive_finite(name, value)
         gym.utils.RecordConstructorArgs.__init__(self, mode=mode, max_step_m=max_step_m,
                                                  max_turn_rad=max_turn_rad)
         gym.ActionWrapper.__init__(self, env)
         self.mode, self.max_step_m, self.max_turn_rad = mode, float(max_step_m), float(max_turn_rad)
-        task = env.unwrapped.task
         self._low, self._high = task.workspace_low, task.workspace_high
         n = 10 if mode == "absolute" else 7
         self.action_space = spaces.Box(-1.0, 1.0, (n,), dtype=np.float32)
 
     def action(self, action: np.ndarray) -> np.ndarray:
-        """The wrapped env's absolute action (10,) for a normalized one."""
-        a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
+        """The wrapped env's absolute action (10,) for a normalized one.
+
+        Finite values outside [-1, 1] are clipped (as RL libraries expect); a wrong shape,
+        a non-numeric or a non-finite action is refused with a one-line error.
+        """
+        a = np.clip(self._checked(action), -1.0, 1.0)
         out = np.empty(10, dtype=np.float32)
         if self.mode == "absolute":
             out[:3] = self._low + (a[:3] + 1.0) * 0.5 * (self._high - self._low)
@@ -69,6 +86,21 @@ class RLActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
         out[3:9] = rot6d_from_matrix(turn @ quat_to_matrix(base.target_quat_world))
         out[9] = a[6]
         return out
+
+    def _checked(self, action: object) -> np.ndarray:
+        """``action`` as float64 of this mode's shape, or ``InvalidArgumentError``."""
+        n = self.action_space.shape[0]
+        arr = np.asarray(action)
+        if arr.dtype.kind not in "fiu" or arr.shape != (n,):
+            raise InvalidArgumentError(
+                f"invalid {self.mode} action of shape {arr.shape} and dtype {arr.dtype}; valid: "
+                f"{n} numbers in [-1, 1] (RLActions mode {self.mode!r})")
+        arr = arr.astype(np.float64)
+        if not np.all(np.isfinite(arr)):
+            raise InvalidArgumentError(
+                f"invalid {self.mode} action {arr.tolist()}: not finite; valid: {n} finite "
+                "numbers in [-1, 1]")
+        return arr
 
     def reset(self, **kwargs):  # noqa: ANN003, ANN201 - gymnasium's signature
         obs, info = self.env.reset(**kwargs)

@@ -6,20 +6,74 @@ same planning, seeds, resume, CSV and plots as the CLI, and returns the episodes
 
 from __future__ import annotations
 
+import math
+import re
 import sys
 from collections.abc import Callable, Sequence
+from numbers import Real
 from pathlib import Path
 
 import gymnasium as gym
+import numpy as np
 import pandas as pd
 
+from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.interface import Policy
 from impact_eval.grid import format_value
-from impact_eval.methods import MethodSpec, register_method
+from impact_eval.methods import CONTROLLERS, MethodSpec, temporary_method
+
+
+class EvaluationError(ImpactError):
+    """``evaluate`` ran, but every episode of some cell raised (the CLI exits 1 there)."""
+
 
 PolicySource = Policy | Callable[[str, gym.Env], Policy]
 """A policy (``reset(n_envs)``, ``act(batched obs) -> (B, 10)``) or a factory
 ``(env_id, env) -> Policy`` called once."""
+
+
+def _check_policy_object(policy: object, what: str) -> None:
+    """One-line error unless ``policy`` has callable ``reset`` and ``act`` (an instance)."""
+    if isinstance(policy, type):
+        raise InvalidArgumentError(
+            f"{what} is the class {policy.__name__}, not a policy; pass an instance "
+            f"({policy.__name__}(...)) or a factory (env_id, env) -> policy")
+    missing = [m for m in ("reset", "act") if not callable(getattr(policy, m, None))]
+    if missing:
+        raise InvalidArgumentError(
+            f"{what} {type(policy).__name__} lacks {' and '.join(missing)}; a policy needs "
+            "reset(n_envs) and act(batched obs) -> (B, 10) (impact_envs.policies.interface)")
+
+
+def _check_int(name: str, value: object, low: int) -> int:
+    """``value`` as an int >= ``low`` (bools and floats refused)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise InvalidArgumentError(f"invalid {name} {value!r}; valid: an integer >= {low}")
+    return int(value)
+
+
+def check_values(values: object) -> list[float]:
+    """``values`` as a non-empty list of finite real numbers (strings and bools refused)."""
+    if isinstance(values, (str, bytes)) or not isinstance(values, (Sequence, np.ndarray)):
+        raise InvalidArgumentError(
+            f"invalid values {values!r}; valid: a sequence of numbers, e.g. [0.2, 2.5, 5.0]")
+    numbers = []
+    for v in list(values):
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (Real, np.number)) or not (
+                math.isfinite(float(v))):
+            raise InvalidArgumentError(
+                f"invalid value {v!r} in values; valid: finite real numbers, e.g. [0.2, 2.5]")
+        numbers.append(float(v))
+    if not numbers:
+        raise InvalidArgumentError("values is empty; give at least one parameter value")
+    return numbers
+
+
+def _check_name(name: object) -> str:
+    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.\-]+", name):
+        raise InvalidArgumentError(
+            f"invalid name {name!r}; valid: letters, digits, '_', '.', '-' (no comma or space)")
+    return name
 
 
 def evaluate(
@@ -45,32 +99,58 @@ def evaluate(
         out: Output directory: ``episodes.csv``, ``summary.csv``, ``run.json``, ``plots/``.
         episodes: Episodes per value (paired seeds, as the CLI's).
         controller: ``"impact"`` or ``"impedance"``.
-        name: The method's name in the CSV and plots.
+        name: The method's name in the CSV and plots; not a built-in method's name. It is
+            registered for this call only.
         param: The parameter to sweep (default: the env's first).
         seed: Base seed of the episode seeds.
         envs_per_worker: Episodes run in lockstep (the batch size of ``policy.act``).
-        resume: Continue an interrupted run in ``out`` (same arguments).
+        resume: Continue an interrupted run in ``out``; every argument must be the same
+            (controller included), else the call is refused.
 
     Returns:
         The episodes table (one row per episode, the columns of ``episodes.csv``).
 
     Raises:
         InvalidArgumentError: Bad input (one line naming the valid choices), nothing written.
+        EvaluationError: Every episode of some cell raised (a broken policy or env); the
+            rows are in ``out/episodes.csv``, as the CLI's exit 1.
     """
+    from impact_eval.cli import crashed_cells
     from impact_eval.execute import execute
     from impact_eval.prepare import SweepRequest, prepare
 
-    def build(env_id_: str, env: gym.Env) -> Policy:
-        return policy(env_id_, env) if callable(policy) and not hasattr(policy, "act") else policy
+    if policy is None:
+        raise InvalidArgumentError(
+            "invalid policy None; valid: an object with reset/act or a factory "
+            "(env_id, env) -> policy")
+    is_factory = callable(policy) and not isinstance(policy, type) and not hasattr(policy, "act")
+    if not is_factory:
+        _check_policy_object(policy, "policy")
+    numbers = check_values(values)
+    check_choice("controller", controller, CONTROLLERS)
+    if not isinstance(env_id, str):
+        raise InvalidArgumentError(f"invalid env_id {env_id!r}; valid: a registered env id")
 
-    register_method(MethodSpec(name, controller, build, "evaluate() policy object"))
+    def build(env_id_: str, env: gym.Env) -> Policy:
+        built = policy(env_id_, env) if is_factory else policy
+        _check_policy_object(built, "the policy factory returned")
+        return built
+
     request = SweepRequest(
-        env_id=env_id, methods=name, grid=",".join(format_value(float(v)) for v in values),
-        param=param, episodes=episodes, out=Path(out), workers=1,
-        envs_per_worker=envs_per_worker, seed=seed, resume=resume,
+        env_id=env_id, methods=_check_name(name),
+        grid=",".join(format_value(v) for v in numbers), param=param,
+        episodes=_check_int("episodes", episodes, 1), out=Path(out), workers=1,
+        envs_per_worker=_check_int("envs_per_worker", envs_per_worker, 1),
+        seed=_check_int("seed", seed, 0), resume=bool(resume),
     )
-    plan = prepare(request)
-    args = {"env": env_id, "method": name, "grid": request.grid, "param": param,
-            "episodes": episodes, "out": str(out), "seed": seed, "controller": controller}
-    execute(plan, command=[sys.argv[0], "impact_eval.evaluate"], args=args)
+    with temporary_method(MethodSpec(name, controller, build, "evaluate() policy object")):
+        plan = prepare(request)
+        args = {"env": env_id, "method": name, "grid": request.grid, "param": param,
+                "episodes": episodes, "out": str(out), "seed": seed, "controller": controller}
+        execute(plan, command=[sys.argv[0], "impact_eval.evaluate"], args=args)
+    crashed = crashed_cells(Path(out))
+    if crashed:
+        raise EvaluationError(
+            f"every episode raised in {len(crashed)} cell(s): {'; '.join(crashed[:3])}"
+            f"{' ...' if len(crashed) > 3 else ''} (rows in {Path(out) / 'episodes.csv'})")
     return pd.read_csv(Path(out) / "episodes.csv", keep_default_na=False)

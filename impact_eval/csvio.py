@@ -50,6 +50,11 @@ def _encode(rows: Iterable[Mapping[str, object]], header: bool) -> str:
     return buf.getvalue()
 
 
+def encode_rows(rows: Iterable[Mapping[str, object]]) -> str:
+    """The text of an ``episodes.csv`` holding ``rows`` in the given order, header included."""
+    return _encode(rows, header=True)
+
+
 def repair_tail(path: Path) -> None:
     """Drop a last line cut short by a crash mid-write (anything after the last newline)."""
     data = path.read_bytes()

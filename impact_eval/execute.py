@@ -24,15 +24,6 @@ class Result:
     plots: list[Path]
 
 
-def _method_controllers(methods: tuple[str, ...]) -> dict[str, dict[str, object]]:
-    """Per method: env controller, controller preset and warm start (run.json)."""
-    from impact_eval.methods import resolve_method
-
-    specs = [resolve_method(m) for m in methods]
-    return {s.name: {"controller": s.controller, "preset": s.preset, "warm": s.warm}
-            for s in specs}
-
-
 def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict:
     """Initial ``run.json`` content; earlier invocations of a resumed run are kept."""
     cfg = plan.config
@@ -46,7 +37,7 @@ def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict
             "values": list(cfg.values),
             "methods": list(cfg.methods),
             "controller_overrides": list(cfg.controller_overrides),
-            "method_controllers": _method_controllers(cfg.methods),
+            "method_controllers": plan.identity.method_controllers,
         },
         "env": {
             "id": plan.env.env_id,
@@ -75,6 +66,7 @@ def execute(plan: Plan, command: list[str], args: dict[str, object]) -> Result:
         "status": "running",
     }
     record["invocations"].append(invocation)
+    runinfo.write_identity(plan.out, plan.identity)
     runinfo.write_run_json(plan.out, record)
     t0 = time.perf_counter()
     log = EpisodeLog(plan.out / EPISODES_CSV)

@@ -21,9 +21,10 @@ machinery tested) without the scripted experts, diffusion policies or Stable-Bas
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -80,6 +81,21 @@ def register_method(spec: MethodSpec) -> None:
         )
     check_choice("controller preset", spec.preset, PRESETS)
     _REGISTRY[spec.name] = spec
+
+
+@contextlib.contextmanager
+def temporary_method(spec: MethodSpec) -> Iterator[None]:
+    """Register ``spec`` for the block only (``evaluate``'s policy object); its name must be
+    new, so a built-in or plugin method is never shadowed and nothing outlives the call."""
+    if spec.name in _REGISTRY or any(spec.name.startswith(p) for p in SB3_PREFIXES):
+        raise InvalidArgumentError(
+            f"method name {spec.name!r} is taken (built-in or registered methods: "
+            f"{', '.join(_REGISTRY)}); choose another name")
+    register_method(spec)
+    try:
+        yield
+    finally:
+        _REGISTRY.pop(spec.name, None)
 
 
 def method_choices() -> list[str]:

@@ -68,6 +68,8 @@ class Plan:
     out: Path
     done: set[csvio.EpisodeKey]
     previous_run: dict | None
+    identity: runinfo.RunIdentity
+    """Written to ``identity.json`` before the first row (``runinfo.IDENTITY_JSON``)."""
 
 
 def parse_methods(text: str) -> list[MethodSpec]:
@@ -111,7 +113,7 @@ def check_out_dir(out: Path) -> None:
 def load_done(req: SweepRequest, env: EnvInfo, values: list[float]) -> set[csvio.EpisodeKey]:
     """Cells already in ``episodes.csv`` (``--resume``), checked against this grid's seeds."""
     path = req.out / EPISODES_CSV
-    if not path.exists():
+    if not path.exists() or path.stat().st_size == 0:  # 0 bytes: the writer starts it afresh
         return set()
     if not (req.resume or req.extend):
         raise InvalidArgumentError(
@@ -127,7 +129,13 @@ def load_done(req: SweepRequest, env: EnvInfo, values: list[float]) -> set[csvio
                 f"cannot resume: {path} holds {row['env_id']}/{row['param_name']} episodes"
             )
         vi = index.get(key[1])
-        if vi is not None and int(row["seed"]) != episode_seed(req.seed, vi, key[2]):
+        try:
+            seed = int(row["seed"])
+        except ValueError:
+            raise InvalidArgumentError(
+                f"cannot resume: {path} has a row with seed {row['seed']!r} (episode {key}); "
+                "fix or delete that row") from None
+        if vi is not None and seed != episode_seed(req.seed, vi, key[2]):
             raise InvalidArgumentError(
                 f"cannot resume: seeds in {path} do not match this grid and --seed "
                 "(was the grid changed?); use the original arguments or another --out"
@@ -196,12 +204,19 @@ def prepare(req: SweepRequest) -> Plan:
     specs = parse_methods(req.methods)
     info = _inspect_env(req, specs, values)
     check_out_dir(req.out)
-    previous = runinfo.read_run_json(req.out) if req.resume or req.extend else None
+    continuing = req.resume or req.extend
+    previous = runinfo.read_run_json(req.out) if continuing else None
     identity = runinfo.RunIdentity(
         env=req.env_id, seed=req.seed, param_name=info.param_name,
         controller_overrides=tuple(req.controller_overrides),
-        methods=tuple(s.name for s in specs), values=tuple(values), episodes=req.episodes)
-    runinfo.check_resumable(previous, identity, extend=req.extend)
+        methods=tuple(s.name for s in specs), values=tuple(values), episodes=req.episodes,
+        method_controllers={s.name: {"controller": s.controller, "preset": s.preset,
+                                     "warm": s.warm} for s in specs})
+    if continuing:
+        csv_path = req.out / EPISODES_CSV
+        has_rows = csv_path.exists() and bool(csvio.read_rows(csv_path))
+        runinfo.check_resumable(runinfo.recorded_identity(req.out), identity,
+                                extend=req.extend, has_rows=has_rows)
     done = load_done(req, info, values)
     _build_policies(req, specs, info.env_id)
     config = SweepConfig(
@@ -221,4 +236,5 @@ def prepare(req: SweepRequest) -> Plan:
         executor=req.executor,
         ray_address=req.ray_address,
     )
-    return Plan(config=config, env=info, out=req.out, done=done, previous_run=previous)
+    return Plan(config=config, env=info, out=req.out, done=done, previous_run=previous,
+                identity=identity)

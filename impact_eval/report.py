@@ -36,22 +36,53 @@ SUMMARY_COLUMNS: tuple[str, ...] = (
 """Columns of ``summary.csv``: one row per (method, parameter value)."""
 
 
+INTEGER_COLUMNS = ("seed", "episode", "success", "success_once", "length")
+FLOAT_COLUMNS = ("param_value", "time_to_success_s", "energy_j", "peak_torque_nm",
+                 "peak_contact_force_n", "mean_pose_error_m")
+
+
 def load_episodes(out_dir: Path) -> pd.DataFrame:
-    """Read ``out_dir/episodes.csv``; raises ``InvalidArgumentError`` if missing or empty."""
+    """Read and check ``out_dir/episodes.csv``; ``InvalidArgumentError`` (one line naming the
+    file, the row and the column) if it is missing, empty, torn or holds a malformed value."""
     path = Path(out_dir) / EPISODES_CSV
     if not path.is_file():
         raise InvalidArgumentError(f"{path} not found; run impact-eval with --out {out_dir} first")
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        raise InvalidArgumentError(
+            f"{path} ends in a row cut mid-line (a run killed while writing); rerun the sweep "
+            "with --resume and the same arguments, which drops it, or delete that last line")
     try:
         df = pd.read_csv(path, keep_default_na=False, na_values=["nan", "NaN"])
-    except (ValueError, pd.errors.ParserError) as exc:
-        raise InvalidArgumentError(f"cannot read {path}: {exc}") from None
+    except (ValueError, pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise InvalidArgumentError(f"cannot read {path}: {' '.join(str(exc).split())}") from None
     missing = [c for c in EPISODE_COLUMNS if c not in df.columns]
     if missing:
         raise InvalidArgumentError(f"{path} lacks columns {', '.join(missing)}")
     if df.empty:
         raise InvalidArgumentError(f"{path} has no episodes")
+    for column in (*INTEGER_COLUMNS, *FLOAT_COLUMNS):
+        _check_numeric(path, df, column)
     df["failure_reason"] = df["failure_reason"].fillna("").astype(str)
     return df
+
+
+def _check_numeric(path: Path, df: pd.DataFrame, column: str) -> None:
+    """One-line error naming the first row whose ``column`` is not a valid number (ints and
+    0/1 flags where the column holds them); the parsed values are left as pandas read them."""
+    values = pd.to_numeric(df[column], errors="coerce")
+    bad = values.isna() & df[column].notna()
+    if column in INTEGER_COLUMNS:
+        bad |= values.isna() | (values != values.round())
+    if column in ("success", "success_once"):
+        bad |= ~values.isin([0, 1])
+    if bad.any():
+        row = int(bad.to_numpy().argmax())
+        valid = "0 or 1" if column.startswith("success") else (
+            "an integer" if column in INTEGER_COLUMNS else "a number")
+        raise InvalidArgumentError(
+            f"{path} row {row + 2}: invalid {column} {df[column].iloc[row]!r}; valid: {valid} "
+            "(fix or delete the row)")
 
 
 def _summarize_group(g: pd.DataFrame) -> dict[str, object]:
@@ -118,10 +149,13 @@ def write_report(out_dir: Path) -> tuple[Path, list[Path]]:
 
     out_dir = Path(out_dir)
     episodes = load_episodes(out_dir)
+    plots = out_dir / PLOTS_DIR
+    if plots.exists() and not plots.is_dir():
+        raise InvalidArgumentError(f"{plots} is not a directory; move it away to draw the plots")
     summary = summarize(episodes)
     summary_path = out_dir / SUMMARY_CSV
     tmp = summary_path.with_name(SUMMARY_CSV + ".tmp")
     summary.to_csv(tmp, index=False)
     tmp.replace(summary_path)
     (out_dir / "summary.md").write_text(success_table_markdown(summary))
-    return summary_path, plot_all(summary, out_dir / PLOTS_DIR, episodes)
+    return summary_path, plot_all(summary, plots, episodes)

@@ -22,9 +22,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from impact_envs.errors import InvalidArgumentError
-from impact_eval.csvio import read_rows, row_key
+from impact_eval.csvio import encode_rows, read_rows, row_key
 from impact_eval.grid import format_value
-from impact_eval.runinfo import RUN_JSON, package_versions
+from impact_eval.runinfo import IDENTITY_JSON, RUN_JSON, package_versions
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 MANIFEST = "manifest.json"
@@ -121,14 +121,11 @@ def parse_cells(spec: str, args: dict) -> set[Cell]:
 def seed_scratch(table_dir: Path, scratch: Path, cells: set[Cell]) -> None:
     """Copy run.json and every committed row outside ``cells`` into ``scratch``."""
     scratch.mkdir(parents=True)
-    shutil.copy(table_dir / RUN_JSON, scratch / RUN_JSON)
-    lines = (table_dir / "episodes.csv").read_text().splitlines(keepends=True)
-    header, kept = lines[0], []
-    for line, row in zip(lines[1:], read_rows(table_dir / "episodes.csv"), strict=True):
-        key = row_key(row)
-        if (key[0], key[1]) not in cells:
-            kept.append(line)
-    (scratch / "episodes.csv").write_text(header + "".join(kept))
+    for name in (RUN_JSON, IDENTITY_JSON):
+        if (table_dir / name).exists():
+            shutil.copy(table_dir / name, scratch / name)
+    kept = [row for row in read_rows(table_dir / "episodes.csv") if row_key(row)[:2] not in cells]
+    (scratch / "episodes.csv").write_text(encode_rows(kept))
 
 
 def compare(committed: Path, rerun: Path) -> list[str]:
@@ -150,8 +147,9 @@ def compare(committed: Path, rerun: Path) -> list[str]:
             columns = sorted({k for e in differ if e in a and e in b
                               for k in a[e] if a[e][k] != b[e][k]})
             outcome = sum(a[e]["success"] != b[e]["success"] for e in differ if e in a and e in b)
-            lines.append(f"{cell[0]} @ {cell[1]}: {len(differ)}/{len(episodes)} episodes differ "
-                         f"({outcome} in outcome; columns: {', '.join(columns) or 'rows missing'})")
+            named = ", ".join(columns) or "rows missing"
+            lines.append(f"{cell[0]} @ {float(cell[1]):g}: {len(differ)}/{len(episodes)} "
+                         f"episodes differ ({outcome} in outcome; columns: {named})")
     return lines
 
 

@@ -7,7 +7,7 @@ import os
 import platform
 import subprocess
 import sys
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
@@ -15,6 +15,9 @@ from pathlib import Path
 from impact_envs.errors import InvalidArgumentError
 
 RUN_JSON = "run.json"
+IDENTITY_JSON = "identity.json"
+"""What the run's cells are (``RunIdentity``), written before its first row: ``--resume``
+checks it even when run.json is gone."""
 PACKAGES = (
     "impact-robotics",
     "gymnasium",
@@ -79,15 +82,44 @@ def host_info() -> dict[str, object]:
     }
 
 
-def read_run_json(out_dir: Path) -> dict | None:
-    """The previous ``run.json`` of ``out_dir`` or ``None``; a corrupt one is bad input."""
-    path = out_dir / RUN_JSON
+def _read_object(path: Path) -> dict | None:
+    """The JSON object in ``path``, ``None`` if absent; anything else is bad input."""
     if not path.exists():
         return None
     try:
-        return json.loads(path.read_text())
+        data = json.loads(path.read_text())
     except (OSError, ValueError) as exc:
-        raise InvalidArgumentError(f"cannot read {path}: {exc}") from None
+        raise InvalidArgumentError(f"cannot read {path}: {' '.join(str(exc).split())}") from None
+    if not isinstance(data, dict):
+        raise InvalidArgumentError(f"{path} is not a JSON object; restore it or use another --out")
+    return data
+
+
+def read_run_json(out_dir: Path) -> dict | None:
+    """The previous ``run.json`` of ``out_dir`` or ``None``; a corrupt one is bad input."""
+    return _read_object(out_dir / RUN_JSON)
+
+
+def recorded_identity(out_dir: Path) -> dict | None:
+    """The identity a run in ``out_dir`` recorded: ``identity.json``, else run.json's
+    arguments (runs from before the sidecar), else ``None``."""
+    sidecar = _read_object(out_dir / IDENTITY_JSON)
+    if sidecar is not None:
+        return sidecar
+    run = read_run_json(out_dir)
+    args = run.get("args") if run else None
+    if isinstance(args, dict) and all(k in args for k in REQUIRED_KEYS):
+        return args
+    return None
+
+
+def write_identity(out_dir: Path, identity: RunIdentity) -> None:
+    """Write ``identity.json`` atomically (before the first row of the run)."""
+    path = out_dir / IDENTITY_JSON
+    tmp = path.with_name(path.name + ".tmp")
+    data = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(identity).items()}
+    tmp.write_text(json.dumps(data, indent=2) + "\n")
+    os.replace(tmp, path)
 
 
 def write_run_json(out_dir: Path, data: dict) -> None:
@@ -109,24 +141,36 @@ class RunIdentity:
     methods: tuple[str, ...]
     values: tuple[float, ...]
     episodes: int
+    method_controllers: dict[str, dict[str, object]] = field(default_factory=dict)
+    """Per method: env controller, preset and warm start (a name that now means another
+    controller cannot resume the earlier rows)."""
 
 
 _EXTENDABLE = ("methods", "values")
+REQUIRED_KEYS = ("env", "seed", "methods", "values", "episodes")
+"""Keys without which a recorded identity cannot be checked (then ``--resume`` refuses)."""
 
 
-def check_resumable(previous: dict | None, now: RunIdentity, extend: bool = False) -> None:
-    """Refuse ``--resume`` into a run whose ``run.json`` arguments differ from ``now``.
+def check_resumable(recorded: dict | None, now: RunIdentity, extend: bool = False,
+                    has_rows: bool = False) -> None:
+    """Refuse ``--resume`` into a run whose recorded identity differs from ``now``.
 
-    With ``extend``, methods and values may grow (every earlier method kept; new values
-    appended after the earlier ones, whose positions fix the episode seeds): new cells get
-    the same episode count, so no cell ends with a different count. Keys missing from an
-    older ``run.json`` are not checked.
+    ``recorded`` is ``recorded_identity(out)``. With ``extend``, methods and values may grow
+    (every earlier method kept; new values appended after the earlier ones, whose positions
+    fix the episode seeds): new cells get the same episode count, so no cell ends with a
+    different count. Rows without any recorded identity are refused (``has_rows``).
     """
-    if previous is None:
+    if recorded is None:
+        if has_rows:
+            raise InvalidArgumentError(
+                "cannot resume: the output has episodes but neither identity.json nor a "
+                "run.json with its arguments, so what they were run with cannot be checked; "
+                "restore run.json or use another --out")
         return
-    args = previous.get("args", {})
+    _check_controllers(recorded.get("method_controllers"), now.method_controllers)
+    args = recorded
     for key, value in asdict(now).items():
-        if key not in args:
+        if key not in args or key == "method_controllers":
             continue
         was = args[key]
         now_list = list(value) if isinstance(value, tuple) else value
@@ -150,3 +194,15 @@ def check_resumable(previous: dict | None, now: RunIdentity, extend: bool = Fals
         raise InvalidArgumentError(
             f"cannot resume: {key} was {was!r} in run.json, now {now_list!r}; use the same "
             f"value (every cell keeps one episode count) or another --out{hint}")
+
+
+def _check_controllers(was: object, now: dict[str, dict[str, object]]) -> None:
+    """Each method present in both must run the same controller, preset and warm start."""
+    if not isinstance(was, dict):
+        return
+    for method, setting in now.items():
+        before = was.get(method)
+        if before is not None and before != setting:
+            raise InvalidArgumentError(
+                f"cannot resume: method {method!r} ran with {before} and would now run with "
+                f"{setting}; use the same controller or another --out")

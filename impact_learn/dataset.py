@@ -81,9 +81,7 @@ class ReplayWriter:
         self.path = Path(path)
         self.obs_keys = tuple(obs_dims)
         if append and self.path.exists():
-            self.root = zarr.open_group(str(self.path), mode="r+")
-            self._check_attrs(attrs)
-            self._truncate_partial()
+            self._open_for_append(attrs)
             return
         if self.path.exists():
             raise InvalidArgumentError(f"{self.path} exists; pass --resume to append or remove it")
@@ -94,6 +92,23 @@ class ReplayWriter:
             data.zeros(name=key, shape=(0, dim), chunks=(CHUNK_ROWS, dim), dtype="float32")
         for key, dtype in {**META_DTYPES, "episode_ends": "int64"}.items():
             meta.zeros(name=key, shape=(0,), chunks=(CHUNK_ROWS,), dtype=dtype)
+
+    def _open_for_append(self, attrs: Mapping[str, Any]) -> None:
+        """Open, check and trim an existing store; a damaged one is a one-line error."""
+        try:
+            self.root = zarr.open_group(str(self.path), mode="r+")
+            self._check_attrs(attrs)
+            self._truncate_partial()
+            for key in (*self.obs_keys, ACTION_KEY, *META_DTYPES, "episode_ends"):
+                group = "meta" if key in META_DTYPES or key == "episode_ends" else "data"
+                self.root[f"{group}/{key}"][:]  # every chunk decodes (a torn write does not)
+        except InvalidArgumentError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - zarr/numcodecs raise many types here
+            msg = " ".join(str(exc).split())[:160]
+            raise InvalidArgumentError(
+                f"cannot resume {self.path}: the store is damaged ({type(exc).__name__}: "
+                f"{msg}); delete it and collect again") from None
 
     def _check_attrs(self, attrs: Mapping[str, Any]) -> None:
         stored = dict(self.root.attrs)

@@ -286,3 +286,15 @@ def test_env_factory_sets_the_envs_own_parameter(tmp_path):
     assert info["tool_mass"] == 1.5
 
 
+
+
+@pytest.mark.parametrize("target", ["data/action", "meta/episode_ends"])
+def test_resume_on_a_store_with_a_damaged_chunk_is_one_line(tmp_path, target):
+    out = tmp_path / "d.zarr"
+    _collect(out, param_list=(0.2, 3.0), episodes=3)
+    chunks = sorted(p for p in (out / target).rglob("*") if p.is_file() and p.name[0].isdigit())
+    assert chunks, f"no chunk files under {out / target}"
+    chunks[0].write_bytes(b"\x00torn write")
+    with pytest.raises(InvalidArgumentError) as err:
+        _collect(out, param_list=(0.2, 3.0), resume=True)
+    assert "the store is damaged" in str(err.value) and "\n" not in str(err.value)

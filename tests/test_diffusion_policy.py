@@ -253,3 +253,22 @@ def test_frozen_unet_equals_the_eager_network_or_falls_back(monkeypatch):
 
         monkeypatch.setattr(torch.jit, "trace", broken)
         assert inference.frozen_unet(*args) is policy.net
+
+
+@pytest.mark.parametrize("field,value,message", [
+    ("horizon", "16", "field horizon: '16'; valid: an integer"),
+    ("lr", "1e-4", "field lr: '1e-4'; valid: a number"),
+    ("down_dims", [16, "32"], "field down_dims: [16, '32']; valid: a list of integers"),
+    ("binary_gripper", 1, "field binary_gripper: 1; valid: true or false"),
+    ("obs_keys", "ee_pos", "field obs_keys: 'ee_pos'; valid: a list of strings"),
+    ("num_inference_steps", 4.0, "field num_inference_steps: 4.0"),
+    ("betas", None, "field betas: None; valid: a list of numbers"),
+])
+def test_checkpoint_config_of_a_wrong_type_names_the_field(tmp_path, field, value, message):
+    random_policy(SMALL).save(tmp_path)
+    cfg = json.loads((tmp_path / "config.json").read_text())
+    cfg[field] = value
+    (tmp_path / "config.json").write_text(json.dumps(cfg))
+    with pytest.raises(CheckpointError) as info:
+        DiffusionPolicy.load(tmp_path)
+    assert message in str(info.value) and "\n" not in str(info.value)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from impact_envs import ENV_IDS
+from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
 
@@ -65,3 +66,72 @@ def test_deepcopy_and_pickle_step_identically(env_id):
     reference = _rollout(base, actions)
     for c in [*copies, wrapped]:
         np.testing.assert_array_equal(_rollout(c, actions), reference)
+
+
+def _cut_weight(state):
+    name = next(iter(state.weights))
+    state.weights[name] = state.weights[name][:1].clone()
+
+
+def _cut_array(state):
+    state.arrays["controller"] = state.arrays["controller"][:-1]
+
+
+def _drop_array(state):
+    del state.arrays["estimator"]
+
+
+def _float32_array(state):
+    state.arrays["impedance"] = state.arrays["impedance"].astype(np.float32)
+
+
+def _no_identity(state):
+    del state.identity
+
+
+def _not_a_generator(state):
+    state.rng = 7
+
+
+# name: (maker of the env the state comes from, damage to the state, message part)
+BAD_STATES = {
+    "another task": (lambda: gym.make("IMPACT/Dumbbell-v0"), None, "task"),
+    "impedance env": (lambda: gym.make("IMPACT/Hammer-v0", controller="impedance"), None,
+                      "controller"),
+    "paper preset": (lambda: gym.make("IMPACT/Hammer-v0", controller_preset="paper"), None,
+                     "preset"),
+    "momentum estimator": (lambda: gym.make("IMPACT/Hammer-v0", estimator="momentum"), None,
+                           "config differ"),
+    "weight cut to one row": (None, _cut_weight, "weight"),
+    "array cut short": (None, _cut_array, "array controller"),
+    "array missing": (None, _drop_array, "array names differ"),
+    "array of another dtype": (None, _float32_array, "float32"),
+    "no identity": (None, _no_identity, "another env"),
+    "rng not a generator": (None, _not_a_generator, "rng is not a numpy Generator"),
+    "not a state": (None, "text", "set_state needs an EnvState"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_STATES))
+def test_a_foreign_or_damaged_state_is_refused_and_changes_nothing(case):
+    make_source, damage, message = BAD_STATES[case]
+    env = gym.make("IMPACT/Hammer-v0")
+    env.reset(seed=3)
+    for _ in range(5):
+        env.step(env.action_space.sample() * 0 + env.unwrapped.action_space.low)
+    source = (make_source or (lambda: gym.make("IMPACT/Hammer-v0")))()
+    source.reset(seed=8)
+    state = source.unwrapped.get_state()
+    if callable(damage):
+        damage(state)
+    elif damage is not None:
+        state = damage
+    before = env.unwrapped.get_state()
+    with pytest.raises(InvalidArgumentError) as err:
+        env.unwrapped.set_state(state)
+    assert message in str(err.value) and "\n" not in str(err.value)
+    after = env.unwrapped.get_state()
+    assert all(np.array_equal(before.arrays[k], after.arrays[k]) for k in before.arrays)
+    for name in ("body_mass", "body_pos", "body_inertia", "geom_size"):
+        assert np.array_equal(getattr(before.model, name), getattr(after.model, name))
+    assert np.array_equal(before.data.qpos, after.data.qpos)

@@ -8,7 +8,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import impact_envs
-from impact_envs.envs.options import RenderOptions
+from impact_envs.envs.options import RenderOptions, RobotOptions
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
@@ -219,3 +219,62 @@ def test_dense_reward_grows_along_the_expert_and_is_1_on_success(env_id):
     env.close()
     with pytest.raises(InvalidArgumentError, match="valid choices: sparse, dense"):
         gym.make(env_id, reward_type="shaped")
+
+
+# name: (gym.make keyword arguments, part of the one-line message)
+BAD_OPTIONS = {
+    "grasp force a string": ({"robot": lambda: RobotOptions(grasp_force_n="70")},
+                             "invalid grasp_force_n '70'"),
+    "grasp force inf": ({"robot": lambda: RobotOptions(grasp_force_n=float("inf"))},
+                        "invalid grasp_force_n inf"),
+    "grasp force nan": ({"robot": lambda: RobotOptions(grasp_force_n=float("nan"))},
+                        "invalid grasp_force_n nan"),
+    "grasp force negative": ({"robot": lambda: RobotOptions(grasp_force_n=-1.0)},
+                             "invalid grasp_force_n -1.0"),
+    "sensor noise a string": ({"robot": lambda: RobotOptions(sensor_noise="yes")},
+                              "invalid sensor_noise 'yes'"),
+    "mass error a string": ({"robot": lambda: RobotOptions(model_mass_error="0")},
+                            "invalid model_mass_error '0'"),
+    "camera unknown": ({"render_mode": "rgb_array", "render": lambda: RenderOptions(camera="nope")},
+                       "invalid camera 'nope'; valid choices: front, side, overview"),
+    "camera not a string": ({"render": lambda: RenderOptions(camera=3)}, "invalid camera 3"),
+    "render width zero": ({"render": lambda: RenderOptions(width=0)}, "invalid render width 0"),
+    "render width fractional": ({"render": lambda: RenderOptions(width=2.5)},
+                                "invalid render width 2.5"),
+    "render height a string": ({"render": lambda: RenderOptions(height="240")},
+                               "invalid render height '240'"),
+    "render width huge": ({"render": lambda: RenderOptions(width=100000)},
+                          "from 1 to 4096 px"),
+    "render larger than the buffer": ({"render": lambda: RenderOptions(width=1000, height=900)},
+                                      "at most 640x480 px"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_OPTIONS))
+def test_bad_robot_and_render_options_are_one_line(case):
+    kwargs, message = BAD_OPTIONS[case]
+    with pytest.raises(InvalidArgumentError) as err:
+        gym.make("IMPACT/Hammer-v0", **{k: v() if callable(v) else v for k, v in kwargs.items()})
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("options,seed,message", [
+    ([("object_mass", 2.0)], None, "invalid reset options"),
+    ("object_mass=2", None, "invalid reset options 'object_mass=2'"),
+    (None, 1.5, "invalid seed 1.5"),
+    (None, "0", "invalid seed '0'"),
+])
+def test_bad_reset_arguments_are_one_line(options, seed, message):
+    env = gym.make("IMPACT/Hammer-v0")
+    with pytest.raises(InvalidArgumentError) as err:
+        env.reset(seed=seed, options=options)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_refused_first_reset_does_not_break_the_env():
+    env = gym.make("IMPACT/Hammer-v0")
+    with pytest.raises(InvalidArgumentError):
+        env.reset(options={"object_mass": -1.0})
+    env.reset(seed=0)
+    obs, *_ = env.step(env.unwrapped.action_space.low)
+    assert np.isfinite(obs["ee_pos"]).all()

@@ -93,6 +93,8 @@ def test_resume_completes_a_partial_csv(tmp_path: Path) -> None:
     part.mkdir()
     (part / "episodes.csv").write_text("".join(lines[:20]) + lines[20][:15])  # torn row
     assert main(sweep_args(part, "--workers", "2")) == 2  # no --resume: refused
+    assert main(sweep_args(part, "--workers", "2", "--resume")) == 2  # rows, no identity
+    (part / "identity.json").write_text((full / "identity.json").read_text())
     assert main(sweep_args(part, "--workers", "2", "--resume")) == 0
     assert (part / "episodes.csv").read_text() == (full / "episodes.csv").read_text()
     assert main(sweep_args(part, "--workers", "2", "--resume", "--seed", "12")) == 2

@@ -67,12 +67,10 @@ def test_make_env_applies_overrides_and_resume_refuses_other_overrides() -> None
     assert plain.unwrapped.controller.config == ControllerConfig()
     plain.close()
     previous = {
-        "args": {
-            "env": "IMPACT/Hammer-v0",
-            "seed": 0,
-            "param_name": "object_mass",
-            "controller_overrides": [],
-        }
+        "env": "IMPACT/Hammer-v0",
+        "seed": 0,
+        "param_name": "object_mass",
+        "controller_overrides": [],
     }
     same = RunIdentity("IMPACT/Hammer-v0", 0, "object_mass", (), ("impact",), (1.0,), 5)
     check_resumable(previous, same)

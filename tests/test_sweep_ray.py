@@ -121,6 +121,35 @@ def test_bad_executor_input_is_one_line(tmp_path, capsys):
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
 
+def _free_loopback_port() -> int:
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]  # closed again: nothing listens there
+
+
+@pytest.mark.parametrize("address,message", [
+    ("127.0.0.1:{port}", "cannot reach the Ray cluster at 127.0.0.1:{port} within 5 s"),
+    ("ray://127.0.0.1:{port}", "cannot reach the Ray cluster at ray://127.0.0.1:{port}"),
+    ("127.0.0.1", "invalid Ray address '127.0.0.1'; valid: HOST:PORT"),
+    ("127.0.0.1:99999", "invalid Ray address '127.0.0.1:99999'"),
+    (":6379", "invalid Ray address ':6379'"),
+    ("127.0.0.1:http", "invalid Ray address '127.0.0.1:http'"),
+])
+def test_an_unreachable_or_malformed_ray_address_is_refused_before_any_output(
+        tmp_path, capsys, monkeypatch, address, message):
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    port = _free_loopback_port()
+    address, message = address.format(port=port), message.format(port=port)
+    t0 = time.monotonic()
+    out = tmp_path / "out"
+    assert main(sweep_args(out, "--executor", "ray", "--ray-address", address)) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not out.exists() and time.monotonic() - t0 < 60
+
+
 @pytest.mark.slow
 def test_a_driver_joins_a_two_node_cluster_by_address(reference, tmp_path, monkeypatch):
     from ray.cluster_utils import Cluster

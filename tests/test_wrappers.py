@@ -84,3 +84,61 @@ def test_a_physics_blow_up_ends_the_episode_instead_of_raising(monkeypatch):
     assert info["failure_reason"] == "unstable: velocity blow-up at t=0.610 s"
     for key in first:
         np.testing.assert_array_equal(obs[key], first[key])
+
+
+# name: (mode, action, part of the one-line message); the env state must not change
+BAD_ACTIONS = {
+    "absolute too long": ("absolute", np.zeros(11), "shape (11,)"),
+    "absolute too short": ("absolute", np.zeros(7), "shape (7,)"),
+    "absolute batched": ("absolute", np.zeros((1, 10)), "shape (1, 10)"),
+    "absolute scalar": ("absolute", 0.5, "shape ()"),
+    "absolute +inf": ("absolute", np.r_[np.inf, np.zeros(9)], "not finite"),
+    "absolute nan": ("absolute", np.r_[np.zeros(9), np.nan], "not finite"),
+    "absolute strings": ("absolute", np.array(["0"] * 10), "dtype <U1"),
+    "absolute bools": ("absolute", np.ones(10, dtype=bool), "dtype bool"),
+    "absolute None": ("absolute", None, "dtype object"),
+    "delta ten values": ("delta", np.zeros(10), "shape (10,)"),
+    "delta six values": ("delta", np.zeros(6), "shape (6,)"),
+    "delta -inf": ("delta", np.r_[-np.inf, np.zeros(6)], "not finite"),
+    "delta nan": ("delta", np.full(7, np.nan), "not finite"),
+    "delta list of lists": ("delta", [[0.0] * 7], "shape (1, 7)"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_ACTIONS))
+def test_bad_actions_are_one_line_and_change_nothing(case):
+    mode, action, message = BAD_ACTIONS[case]
+    env = RLActions(gym.make("IMPACT/Hammer-v0"), mode=mode)
+    env.reset(seed=0)
+    base = env.unwrapped
+    before = (base.target_pos_world.copy(), base.sim.data.time)
+    with pytest.raises(InvalidArgumentError) as err:
+        env.step(action)
+    assert message in str(err.value) and "\n" not in str(err.value)
+    assert np.array_equal(base.target_pos_world, before[0]) and base.sim.data.time == before[1]
+
+
+def test_finite_actions_outside_the_box_are_clipped():
+    env = RLActions(gym.make("IMPACT/Hammer-v0"))
+    a = np.r_[[5.0, -7.0, 0.0], np.zeros(7)]
+    b = np.r_[[1.0, -1.0, 0.0], np.zeros(7)]
+    np.testing.assert_array_equal(env.action(a), env.action(b))
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    ({"max_step_m": float("nan")}, "invalid max_step_m nan"),
+    ({"max_step_m": -0.01}, "invalid max_step_m -0.01"),
+    ({"max_step_m": 0.0}, "invalid max_step_m 0.0"),
+    ({"max_step_m": "0.02"}, "invalid max_step_m '0.02'"),
+    ({"max_turn_rad": float("inf")}, "invalid max_turn_rad inf"),
+    ({"max_turn_rad": True}, "invalid max_turn_rad True"),
+])
+def test_bad_wrapper_arguments_are_one_line(kwargs, message):
+    with pytest.raises(InvalidArgumentError) as err:
+        RLActions(gym.make("IMPACT/Hammer-v0"), mode="delta", **kwargs)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_non_impact_env_is_one_line():
+    with pytest.raises(InvalidArgumentError, match="RLActions wraps an IMPACT env.*Pendulum"):
+        RLActions(gym.make("Pendulum-v1"))

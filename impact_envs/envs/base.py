@@ -10,6 +10,8 @@ from __future__ import annotations
 import copy
 import dataclasses
 import importlib
+from collections.abc import Mapping
+from numbers import Integral
 from typing import Any, Literal
 
 import gymnasium as gym
@@ -130,6 +132,7 @@ class ImpactEnv(gym.Env):
                                task.before_tick if task.has_tick_hook else None)
         self._warm: ModelSnapshot | None = None
         self._camera, self._size = render.camera, (int(render.height), int(render.width))
+        self._check_render(render)
         self._renderer: mujoco.Renderer | None = None
         self.action_space = spaces.Box(
             low=np.concatenate([task.workspace_low, -np.ones(7)]).astype(np.float32),
@@ -150,6 +153,19 @@ class ImpactEnv(gym.Env):
             check_choice("controller_preset", controller_preset, PRESETS)
         if render_mode is not None:
             check_choice("render_mode", render_mode, self.metadata["render_modes"])
+
+    def _check_render(self, render: RenderOptions) -> None:
+        """The camera must be one of the scene's and the size fit its offscreen buffer."""
+        model = self.sim.model
+        cameras = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_CAMERA, i)
+                   for i in range(model.ncam)]
+        check_choice("camera", render.camera, cameras)
+        gl = model.vis.global_
+        if render.width > gl.offwidth or render.height > gl.offheight:
+            raise InvalidArgumentError(
+                f"invalid render size {render.width}x{render.height}; valid: at most "
+                f"{gl.offwidth}x{gl.offheight} px (the scene's offscreen buffer, <global "
+                "offwidth offheight> in the scene XML)")
 
     def _initial_params(self, object_mass: float | None,
                         task_params: dict[str, float] | None) -> dict[str, float]:
@@ -243,6 +259,12 @@ class ImpactEnv(gym.Env):
 
     # ------------------------------------------------------------------- reset
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        if options is not None and not isinstance(options, Mapping):
+            raise InvalidArgumentError(
+                f"invalid reset options {options!r}; valid: None or a dict of task parameters "
+                f"({', '.join(p.name for p in self.task.params)})")
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, Integral)):
+            raise InvalidArgumentError(f"invalid seed {seed!r}; valid: None or an integer >= 0")
         super().reset(seed=seed)
         params = dict(self._params)
         for name, value in (options or {}).items():

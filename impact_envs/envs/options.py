@@ -2,9 +2,22 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from numbers import Integral, Real
 
 from impact_envs.errors import InvalidArgumentError
+
+MAX_RENDER_PX = 4096
+"""Largest render width or height [px] (the scenes' offscreen buffer is sized to match)."""
+
+
+def _real(name: str, value: object, low: float, high: float, unit: str) -> None:
+    """One-line error unless ``value`` is a real number (not a bool) in [low, high]."""
+    if isinstance(value, bool) or not isinstance(value, Real) or not (
+            math.isfinite(float(value)) and low <= float(value) <= high):
+        raise InvalidArgumentError(f"invalid {name} {value!r}; valid: a number from {low:g} to "
+                                   f"{high:g}{unit}")
 
 
 @dataclass(frozen=True)
@@ -22,12 +35,11 @@ class RobotOptions:
     model_mass_error: float = 0.0
 
     def __post_init__(self) -> None:
-        if not self.grasp_force_n >= 0.0:
+        if not isinstance(self.sensor_noise, bool):
             raise InvalidArgumentError(
-                f"invalid grasp_force_n {self.grasp_force_n!r}; valid: a force >= 0 N")
-        if not -0.9 <= self.model_mass_error <= 10.0:
-            raise InvalidArgumentError(
-                f"invalid model_mass_error {self.model_mass_error!r}; valid: -0.9 to 10")
+                f"invalid sensor_noise {self.sensor_noise!r}; valid: True or False")
+        _real("grasp_force_n", self.grasp_force_n, 0.0, 1000.0, " N")
+        _real("model_mass_error", self.model_mass_error, -0.9, 10.0, "")
 
 
 @dataclass(frozen=True)
@@ -41,6 +53,14 @@ class RenderOptions:
     camera: str = "overview"
 
     def __post_init__(self) -> None:
-        if not (self.width >= 1 and self.height >= 1):
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, Integral) or not (
+                    1 <= value <= MAX_RENDER_PX):
+                raise InvalidArgumentError(
+                    f"invalid render {name} {value!r}; valid: an integer from 1 to "
+                    f"{MAX_RENDER_PX} px")
+        if not isinstance(self.camera, str) or not self.camera:
             raise InvalidArgumentError(
-                f"invalid render size {self.width}x{self.height}; valid: positive pixels")
+                f"invalid camera {self.camera!r}; valid: a camera name of the scene, e.g. "
+                "'overview', 'front', 'side'")

@@ -17,6 +17,8 @@ import mujoco
 import numpy as np
 import torch
 
+from impact_envs.errors import InvalidArgumentError
+
 if TYPE_CHECKING:
     from impact_envs.envs.base import ImpactEnv
 
@@ -37,6 +39,73 @@ class EnvState:
     task: dict[str, Any]
     env: dict[str, Any]
     rng: np.random.Generator
+    identity: dict[str, str]
+    """What the state belongs to (``state_identity``): ``set_state`` refuses another."""
+
+
+def state_identity(env: ImpactEnv) -> dict[str, str]:
+    """Env class, task, controller mode, preset and the full controller configuration."""
+    return {"env": f"{type(env).__module__}.{type(env).__qualname__}",
+            "task": str(env.task.name), "controller": str(env.controller_mode),
+            "preset": str(env.controller_preset), "config": repr(env.controller.config)}
+
+
+def _shape_errors(expected: dict[str, Any], given: object, what: str) -> list[str]:
+    """Differences in names, shapes and dtypes between live arrays and a state's copies."""
+    if not isinstance(given, dict) or set(given) != set(expected):
+        return [f"{what} names differ"]
+    errors = []
+    for name, live in expected.items():
+        copy_ = given[name]
+        shape, dtype = tuple(live.shape), live.dtype
+        if tuple(getattr(copy_, "shape", ())) != shape or getattr(copy_, "dtype", None) != dtype:
+            errors.append(f"{what} {name}: {tuple(getattr(copy_, 'shape', ()))} "
+                          f"{getattr(copy_, 'dtype', type(copy_).__name__)} for {shape} {dtype}")
+    return errors
+
+
+def check_state(env: ImpactEnv, state: object) -> None:
+    """``InvalidArgumentError`` (one line) unless ``state`` is a snapshot of an env like
+    ``env``: same identity, and every array of the same name, shape and dtype."""
+    if not isinstance(state, EnvState):
+        raise InvalidArgumentError(
+            f"set_state needs an EnvState from get_state(), got {type(state).__name__}")
+    ident = getattr(state, "identity", None)
+    mine = state_identity(env)
+    if ident != mine:
+        keys = [k for k in mine if not isinstance(ident, dict) or ident.get(k) != mine[k]]
+        shown = {k: (ident or {}).get(k) if isinstance(ident, dict) else None
+                 for k in keys if k != "config"}
+        raise InvalidArgumentError(
+            f"set_state: the state is of another env ({', '.join(keys)} differ: state "
+            f"{shown}, env { {k: mine[k] for k in keys if k != 'config'} }); "
+            "restore it into an env made with the same arguments")
+    errors = _shape_errors(_model_arrays(env.sim.model), _model_arrays(state.model), "model")
+    errors += _shape_errors(_live_arrays(env), state.arrays, "array")
+    net = env.controller.internal_model.net.state_dict()
+    errors += _shape_errors(net, state.weights, "weight")
+    if not isinstance(state.env, dict) or set(state.env) != set(ENV_FIELDS):
+        errors.append("env fields differ")
+    if not isinstance(state.task, dict):
+        errors.append("task fields are not a dict")
+    if not isinstance(state.rng, np.random.Generator):
+        errors.append("rng is not a numpy Generator")
+    if errors:
+        raise InvalidArgumentError(f"set_state: the state does not fit this env: {errors[0]}"
+                                   f"{f' (and {len(errors) - 1} more)' if len(errors) > 1 else ''}")
+
+
+def _model_arrays(model: object) -> dict[str, np.ndarray]:
+    """Every non-empty numeric array of an MjModel, by name."""
+    if not isinstance(model, mujoco.MjModel):
+        return {}
+    arrays = {}
+    for name in dir(model):
+        if not name.startswith("_"):
+            value = getattr(model, name, None)
+            if isinstance(value, np.ndarray) and value.size:
+                arrays[name] = value
+    return arrays
 
 
 def _live_arrays(env: ImpactEnv) -> dict[str, np.ndarray]:
@@ -59,12 +128,8 @@ def _live_arrays(env: ImpactEnv) -> dict[str, np.ndarray]:
 def _copy_model(dst: mujoco.MjModel, src: mujoco.MjModel) -> None:
     """Copy every numeric array of ``src`` into ``dst`` (same scene: per-episode parameters
     such as masses, inertias, goal positions and frictions are model fields)."""
-    for name in dir(src):
-        if name.startswith("_"):
-            continue
-        value = getattr(src, name, None)
-        if isinstance(value, np.ndarray) and value.size:
-            np.copyto(getattr(dst, name), value)
+    for name, value in _model_arrays(src).items():
+        np.copyto(getattr(dst, name), value)
 
 
 def capture(env: ImpactEnv) -> EnvState:
@@ -81,11 +146,16 @@ def capture(env: ImpactEnv) -> EnvState:
         task=copy.deepcopy(env.task.__dict__),
         env=copy.deepcopy({k: getattr(env, k, None) for k in ENV_FIELDS}),
         rng=copy.deepcopy(env.np_random),
+        identity=state_identity(env),
     )
 
 
 def restore(env: ImpactEnv, state: EnvState) -> None:
-    """Write ``state`` into ``env`` in place (an env of the same task and settings)."""
+    """Write ``state`` into ``env`` in place (an env of the same task and settings).
+
+    Everything is checked first (``check_state``): a refused state leaves ``env`` as it was.
+    """
+    check_state(env, state)
     sim = env.sim
     _copy_model(sim.model, state.model)
     mujoco.mj_copyData(sim.data, sim.model, state.data)

@@ -162,6 +162,9 @@ class DiffusionConfig:
             raise InvalidArgumentError(
                 f"unknown DiffusionConfig keys {unknown}; valid keys: {', '.join(names)}"
             )
+        defaults = cls()
+        for name, value in data.items():
+            _check_field_type(name, value, getattr(defaults, name))
         return cls(**data)
 
     def to_json(self, path: str | Path) -> None:
@@ -181,3 +184,38 @@ class DiffusionConfig:
                 f"config {path} must be a JSON object of DiffusionConfig fields, "
                 f"got {type(data).__name__}")
         return cls.from_dict(data)
+
+
+def _kind(default: object, plural: bool = False) -> str:
+    """What a field whose default is ``default`` accepts, in words."""
+    if isinstance(default, bool):
+        return "true or false"
+    for kind, words in ((int, ("an integer", "integers")), (float, ("a number", "numbers")),
+                        (str, ("a string", "strings"))):
+        if isinstance(default, kind):
+            return words[plural]
+    return "a list"
+
+
+def _type_ok(value: object, default: object) -> bool:
+    if isinstance(default, bool):
+        return isinstance(value, bool)
+    if isinstance(default, int):
+        return isinstance(value, int) and not isinstance(value, bool)
+    if isinstance(default, float):
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+    if isinstance(default, str):
+        return isinstance(value, str)
+    if isinstance(default, tuple):
+        if not isinstance(value, (list, tuple)):
+            return False
+        return not default or all(_type_ok(v, default[0]) for v in value)
+    return True
+
+
+def _check_field_type(name: str, value: object, default: object) -> None:
+    """One-line error naming the field when ``value`` is not of the default's type."""
+    if not _type_ok(value, default):
+        element = f" of {_kind(default[0], True)}" if isinstance(default, tuple) and default else ""
+        raise InvalidArgumentError(
+            f"invalid DiffusionConfig field {name}: {value!r}; valid: {_kind(default)}{element}")
