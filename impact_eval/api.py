@@ -76,6 +76,37 @@ def _check_name(name: object) -> str:
     return name
 
 
+def _policy_factory(policy: object) -> Callable[[str, gym.Env], Policy]:
+    """The method's factory for ``policy`` (an instance or a factory), checked: one-line
+    errors for None, a class, or an object without ``reset``/``act`` (also for what a factory
+    returns, when impact-eval's pre-flight builds it before anything is written)."""
+    if policy is None:
+        raise InvalidArgumentError(
+            "invalid policy None; valid: an object with reset/act or a factory "
+            "(env_id, env) -> policy")
+    is_factory = callable(policy) and not isinstance(policy, type) and not hasattr(policy, "act")
+    if not is_factory:
+        _check_policy_object(policy, "policy")
+
+    def build(env_id: str, env: gym.Env) -> Policy:
+        built = policy(env_id, env) if is_factory else policy  # type: ignore[operator]
+        _check_policy_object(built, "the policy factory returned")
+        return built  # type: ignore[return-value]
+
+    return build
+
+
+def _raise_if_all_crashed(out: Path) -> None:
+    """``EvaluationError`` when every episode of some cell raised (the CLI's exit 1)."""
+    from impact_eval.cli import crashed_cells
+
+    crashed = crashed_cells(out)
+    if crashed:
+        raise EvaluationError(
+            f"every episode raised in {len(crashed)} cell(s): {'; '.join(crashed[:3])}"
+            f"{' ...' if len(crashed) > 3 else ''} (rows in {out / 'episodes.csv'})")
+
+
 def evaluate(
     policy: PolicySource,
     env_id: str,
@@ -115,27 +146,14 @@ def evaluate(
         EvaluationError: Every episode of some cell raised (a broken policy or env); the
             rows are in ``out/episodes.csv``, as the CLI's exit 1.
     """
-    from impact_eval.cli import crashed_cells
     from impact_eval.execute import execute
     from impact_eval.prepare import SweepRequest, prepare
 
-    if policy is None:
-        raise InvalidArgumentError(
-            "invalid policy None; valid: an object with reset/act or a factory "
-            "(env_id, env) -> policy")
-    is_factory = callable(policy) and not isinstance(policy, type) and not hasattr(policy, "act")
-    if not is_factory:
-        _check_policy_object(policy, "policy")
+    build = _policy_factory(policy)
     numbers = check_values(values)
     check_choice("controller", controller, CONTROLLERS)
     if not isinstance(env_id, str):
         raise InvalidArgumentError(f"invalid env_id {env_id!r}; valid: a registered env id")
-
-    def build(env_id_: str, env: gym.Env) -> Policy:
-        built = policy(env_id_, env) if is_factory else policy
-        _check_policy_object(built, "the policy factory returned")
-        return built
-
     request = SweepRequest(
         env_id=env_id, methods=_check_name(name),
         grid=",".join(format_value(v) for v in numbers), param=param,
@@ -148,9 +166,5 @@ def evaluate(
         args = {"env": env_id, "method": name, "grid": request.grid, "param": param,
                 "episodes": episodes, "out": str(out), "seed": seed, "controller": controller}
         execute(plan, command=[sys.argv[0], "impact_eval.evaluate"], args=args)
-    crashed = crashed_cells(Path(out))
-    if crashed:
-        raise EvaluationError(
-            f"every episode raised in {len(crashed)} cell(s): {'; '.join(crashed[:3])}"
-            f"{' ...' if len(crashed) > 3 else ''} (rows in {Path(out) / 'episodes.csv'})")
+    _raise_if_all_crashed(Path(out))
     return pd.read_csv(Path(out) / "episodes.csv", keep_default_na=False)
