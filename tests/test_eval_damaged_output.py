@@ -70,17 +70,26 @@ REPORT_CASES: dict[str, tuple[Callable[[Path], None], str]] = {
 }
 
 
+def _refused_with_one_line(finished: Path, tmp_path: Path, capsys: pytest.CaptureFixture,
+                           case: tuple[Callable[[Path], None], str],
+                           argv: Callable[[Path], list[str]]) -> None:
+    """Damage a copy of the finished sweep, run ``argv(out)``: exit 2, the expected message on
+    one line, and every file of the directory byte for byte as it was."""
+    damage, message = case
+    out = _copy(finished, tmp_path / "out")
+    damage(out)
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    assert main(argv(out)) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+
 @pytest.mark.parametrize("case", sorted(REPORT_CASES))
 def test_report_refuses_damaged_input_before_rewriting_anything(
         case: str, finished: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    damage, message = REPORT_CASES[case]
-    out = _copy(finished, tmp_path / "out")
-    damage(out)
-    summary = (out / "summary.csv").read_bytes()
-    assert main(["report", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert message in err and err.count("\n") == 1
-    assert (out / "summary.csv").read_bytes() == summary  # not rewritten
+    _refused_with_one_line(finished, tmp_path, capsys, REPORT_CASES[case],
+                           lambda out: ["report", str(out)])
 
 
 RESUME_CASES: dict[str, tuple[Callable[[Path], None], str]] = {
@@ -103,14 +112,8 @@ RESUME_CASES: dict[str, tuple[Callable[[Path], None], str]] = {
 @pytest.mark.parametrize("case", sorted(RESUME_CASES))
 def test_resume_refuses_damaged_input_with_one_line(
         case: str, finished: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    damage, message = RESUME_CASES[case]
-    out = _copy(finished, tmp_path / "out")
-    damage(out)
-    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
-    assert main([*sweep_args(out, "--workers", "1"), "--resume"]) == 2
-    err = capsys.readouterr().err
-    assert message in err and err.count("\n") == 1
-    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+    _refused_with_one_line(finished, tmp_path, capsys, RESUME_CASES[case],
+                           lambda out: [*sweep_args(out, "--workers", "1"), "--resume"])
 
 
 @pytest.mark.parametrize("change", [("--episodes", "2"), ("--seed", "3"),
