@@ -77,3 +77,54 @@ def test_limiter_reset() -> None:
 def test_limits_config_validation(kwargs: dict) -> None:
     with pytest.raises(InvalidArgumentError):
         LimitsConfig(**kwargs)
+
+
+def _libfranka_limit_rate(max_rate: float, cmd: list[float], last: list[float]) -> list[float]:
+    """libfranka's limitRate (command_saturation.cpp), transcribed to Python floats."""
+    return [lst + max(min((c - lst) / 1e-3, max_rate), -max_rate) * 1e-3
+            for c, lst in zip(cmd, last, strict=True)]
+
+
+def test_libfranka_limits_are_libfranka_constants() -> None:
+    from impact_envs.control.limits import libfranka_limits
+
+    cfg = libfranka_limits()
+    assert cfg.torque_rate_max_nm_per_s == 1000.0 - 1e-3  # kMaxTorqueRate = 1000 - kLimitEps
+    assert cfg.rate_limiter == "libfranka"
+    assert cfg.torque_max_nm == tuple(TAU_MAX)
+
+
+def test_libfranka_rate_limiter_is_bit_identical_to_limit_rate() -> None:
+    from impact_envs.control.limits import libfranka_limits
+
+    rng = np.random.default_rng(3)
+    limiter = TorqueLimiter(libfranka_limits(), dt_s=0.001)
+    last = [0.0] * 7
+    for _ in range(2000):  # steps up to +-3 Nm: mostly rate-limited, some not; no saturation
+        cmd = (np.asarray(last) + rng.uniform(-3.0, 3.0, 7)).clip(-11.0, 11.0)
+        expected = _libfranka_limit_rate(1000.0 - 1e-3, cmd.tolist(), last)
+        out = limiter.apply(cmd, np.zeros(7))
+        assert out.tolist() == expected  # exact, float for float
+        last = expected
+
+
+def test_libfranka_rate_limiter_never_exceeds_the_robots_rate() -> None:
+    from impact_envs.control.limits import libfranka_limits
+
+    limiter = TorqueLimiter(libfranka_limits(), dt_s=0.001)
+    gravity = np.zeros(7)
+    outs = [limiter.apply(np.full(7, 10.0 * (-1) ** (k // 30)), gravity).copy()
+            for k in range(300)]
+    rates = np.abs(np.diff(np.asarray(outs), axis=0)) / 1e-3
+    assert rates.max() < 1000.0  # the robot's discontinuity reflex threshold
+    assert rates.max() > 999.99
+
+
+def test_libfranka_rate_limiter_needs_a_1khz_controller() -> None:
+    from impact_envs.control.config import ControllerConfig
+    from impact_envs.control.limits import libfranka_limits
+
+    with pytest.raises(InvalidArgumentError, match="kDeltaT"):
+        ControllerConfig(dt_s=0.002, limits=libfranka_limits())
+    with pytest.raises(InvalidArgumentError, match="per_tick_clip"):
+        LimitsConfig(rate_limiter="franka")

@@ -19,13 +19,19 @@ from dataclasses import dataclass, field
 from impact_envs.control.estimators import ESTIMATOR_KINDS, EstimatorConfig
 from impact_envs.control.impedance import ImpedanceConfig
 from impact_envs.control.internal_model.config import InternalModelConfig
-from impact_envs.control.limits import LimitsConfig, beyond_hardware_limits
+from impact_envs.control.limits import (
+    LIBFRANKA_DELTA_T_S,
+    LimitsConfig,
+    beyond_hardware_limits,
+    libfranka_limits,
+)
 from impact_envs.control.slow_filter import SlowWrenchConfig
 from impact_envs.control.validation import check_positive
 from impact_envs.errors import InvalidArgumentError
 
 __all__ = ["ESTIMATOR_KINDS", "ControllerConfig", "EstimatorConfig", "ImpedanceConfig",
-           "InternalModelConfig", "LimitsConfig", "SlowWrenchConfig", "beyond_hardware_limits"]
+           "InternalModelConfig", "LimitsConfig", "SlowWrenchConfig", "beyond_hardware_limits",
+           "libfranka_limits"]
 
 
 @dataclass(frozen=True)
@@ -58,4 +64,9 @@ class ControllerConfig:
         if fastest * self.dt_s >= 1.0:
             raise InvalidArgumentError(
                 f"invalid dt_s {self.dt_s!r}; valid: dt_s * max(eta, K_O) < 1 (max rate {fastest})"
+            )
+        if self.limits.rate_limiter == "libfranka" and self.dt_s != LIBFRANKA_DELTA_T_S:
+            raise InvalidArgumentError(
+                f"invalid dt_s {self.dt_s!r} with limits.rate_limiter='libfranka'; valid: "
+                f"{LIBFRANKA_DELTA_T_S} (libfranka's kDeltaT), or rate_limiter='per_tick_clip'"
             )

@@ -1,4 +1,13 @@
-"""Torque saturation and torque-rate limiting (FR3 bounds, libfranka ``limitRate`` semantics)."""
+"""Torque saturation and torque-rate limiting (FR3 bounds; libfranka's ``limitRate`` exactly).
+
+libfranka (``rate_limiting.h``, ``command_saturation.cpp``) limits the torque rate of the
+command without gravity as ``last + clamp((cmd - last) / kDeltaT, -max, max) * kDeltaT`` with
+``kDeltaT = 1e-3`` s and ``kMaxTorqueRate = 1000 - kLimitEps = 999.999`` Nm/s; the robot's own
+``controller_torque_discontinuity`` reflex trips at 1000 Nm/s. ``rate_limiter="libfranka"``
+reproduces that operation for operation (bit for bit, tests/test_limits.py);
+``"per_tick_clip"`` (``last + clip(cmd - last, +-rate * dt)``) is the limiter every published
+table was computed with. docs/controller.md, "Limits on the torque interface".
+"""
 
 from __future__ import annotations
 
@@ -9,6 +18,14 @@ from numba import njit
 
 from impact_envs.control.kernel_layout import _next
 from impact_envs.control.validation import check_len, check_positive
+from impact_envs.errors import check_choice
+
+LIBFRANKA_DELTA_T_S = 1e-3
+"""libfranka's ``kDeltaT`` [s]: the period its ``limitRate`` divides and multiplies by."""
+LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S = 1000.0 - 1e-3
+"""libfranka's ``kMaxTorqueRate`` = 1000 - ``kLimitEps`` [Nm/s] (999.999, every joint)."""
+RATE_LIMITERS: tuple[str, ...] = ("per_tick_clip", "libfranka")
+"""Valid ``LimitsConfig.rate_limiter`` values."""
 
 
 @dataclass(frozen=True)
@@ -17,11 +34,17 @@ class LimitsConfig:
 
     Attributes:
         torque_max_nm: Symmetric per-joint torque bound [Nm] (FR3: 87 x4, 12 x3).
-        torque_rate_max_nm_per_s: Bound on |d tau / dt| [Nm/s] (libfranka: 1000, i.e. 1 Nm/tick).
+        torque_rate_max_nm_per_s: Bound on |d tau / dt| of the command without gravity
+            [Nm/s] (1000, the robot's reflex threshold; libfranka limits to
+            ``LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S`` = 999.999, see ``libfranka_limits``).
+        rate_limiter: ``"per_tick_clip"``: last + clip(cmd - last, +-rate * dt);
+            ``"libfranka"``: libfranka's ``limitRate`` operation for operation (requires
+            the controller's dt_s = 1 ms, libfranka's ``kDeltaT``).
     """
 
     torque_max_nm: tuple[float, ...] = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
     torque_rate_max_nm_per_s: float = 1000.0
+    rate_limiter: str = "per_tick_clip"
 
     def __post_init__(self) -> None:
         values = tuple(float(v) for v in self.torque_max_nm)
@@ -29,6 +52,13 @@ class LimitsConfig:
         check_positive("torque_max_nm", values)
         object.__setattr__(self, "torque_max_nm", values)
         check_positive("torque_rate_max_nm_per_s", self.torque_rate_max_nm_per_s)
+        check_choice("limits.rate_limiter", self.rate_limiter, RATE_LIMITERS)
+
+
+def libfranka_limits() -> LimitsConfig:
+    """The limits exactly as libfranka enforces them on an FR3's torque interface."""
+    return LimitsConfig(torque_rate_max_nm_per_s=LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S,
+                        rate_limiter="libfranka")
 
 
 def beyond_hardware_limits(limits: LimitsConfig) -> list[str]:
@@ -46,14 +76,17 @@ def beyond_hardware_limits(limits: LimitsConfig) -> list[str]:
 # ---------------------------------------------------------------- buffer layout and kernel
 def limiter_size(n: int) -> int:
     """Length of a torque-limiter buffer for ``n`` joints."""
-    return 1 + 3 * n
+    return 3 + 3 * n
 
 
 @njit(cache=True)
 def limiter_views(buf):
-    """(par [max change per tick], tau_max, previous output without gravity, output)."""
-    n = (buf.shape[0] - 1) // 3
-    par, o = _next(buf, 0, 1)
+    """(par, tau_max, previous output without gravity, output).
+
+    par = [max change per tick [Nm], libfranka mode (0/1), max rate [Nm/s]].
+    """
+    n = (buf.shape[0] - 3) // 3
+    par, o = _next(buf, 0, 3)
     tau_max, o = _next(buf, o, n)
     last, o = _next(buf, o, n)
     out, o = _next(buf, o, n)
@@ -73,6 +106,14 @@ def limit_rate_kernel(tau_desired, tau_last, max_delta, out) -> None:
 
 
 @njit(cache=True)
+def limit_rate_libfranka_kernel(tau_desired, tau_last, max_rate, out) -> None:
+    """libfranka's ``limitRate``: out = last + clamp((cmd - last) / 1e-3, +-max_rate) * 1e-3."""
+    for j in range(out.shape[0]):
+        rate = (tau_desired[j] - tau_last[j]) / 1e-3
+        out[j] = tau_last[j] + max(min(rate, max_rate), -max_rate) * 1e-3
+
+
+@njit(cache=True)
 def saturate_kernel(tau, tau_max, out) -> None:
     """out = clip(tau, -tau_max, tau_max) per joint (NaN propagates)."""
     for j in range(out.shape[0]):
@@ -88,7 +129,10 @@ def saturate_kernel(tau, tau_max, out) -> None:
 def torque_limiter(tau_no_gravity, tau_gravity, buf) -> None:
     """Rate-limit without gravity, add gravity, saturate; remember output - gravity."""
     par, tau_max, last, out = limiter_views(buf)
-    limit_rate_kernel(tau_no_gravity, last, par[0], out)
+    if par[1] != 0.0:
+        limit_rate_libfranka_kernel(tau_no_gravity, last, par[2], out)
+    else:
+        limit_rate_kernel(tau_no_gravity, last, par[0], out)
     for j in range(out.shape[0]):
         out[j] += tau_gravity[j]
     saturate_kernel(out, tau_max, out)
@@ -153,7 +197,8 @@ class TorqueLimiter:
         par, self.tau_max, self._last_no_gravity, self.output = limiter_views(self.buffer)
         self.tau_max[:] = config.torque_max_nm
         self.max_delta_nm = config.torque_rate_max_nm_per_s * dt_s
-        par[0] = self.max_delta_nm
+        par[:] = (self.max_delta_nm, float(config.rate_limiter == "libfranka"),
+                  config.torque_rate_max_nm_per_s)
 
     def reset(self, tau_no_gravity: np.ndarray | None = None) -> None:
         """Set the previously commanded torque without gravity (default 0) [Nm]."""
