@@ -27,6 +27,7 @@ KERNEL_SOURCES = (
     "control/estimators.py",
     "control/impedance.py",
     "control/internal_model/kernels.py",
+    "control/internal_model/learner.py",
     "control/kernel_layout.py",
     "control/kernel_math.py",
     "control/kernels.py",

@@ -195,7 +195,7 @@ def test_sgd_step_matches_autograd() -> None:
     optimizer.zero_grad()
     expected_loss.backward()
     optimizer.step()
-    _, weights, biases, _ = model.kernel_args()  # NumPy views of the torch parameters
+    _, weights, biases, _, _ = model.kernel_args()  # NumPy views of the torch parameters
     loss = sgd_step(weights, biases, x.numpy(), y.numpy(), mask.numpy(), 0.01)
     assert loss == pytest.approx(float(expected_loss.detach()), rel=1e-6)
     for p, p_ref in zip(model.net.parameters(), reference.parameters(), strict=True):

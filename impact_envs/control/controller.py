@@ -236,12 +236,12 @@ class ImpactController:
     def kernel_state(self) -> kernels.ControllerState:
         """The buffers of ``kernels.controller_tick`` as one named structure (views: what the
         kernel writes is this controller's state)."""
-        model32, weights, biases, model = self.internal_model.kernel_args()
+        model32, weights, biases, model, learner = self.internal_model.kernel_args()
         return kernels.ControllerState(
             ctl=self.buffer, grams=self._grams, wrench_maps=self.wrench_maps,
             est=self.estimator.buffer, sf=self.slow_filter.buffer, model32=model32,
-            weights=weights, biases=biases, model=model, imp=self.impedance.buffer,
-            lim=self.limiter.buffer)
+            weights=weights, biases=biases, model=model, learner=learner,
+            imp=self.impedance.buffer, lim=self.limiter.buffer)
 
     def loop_inputs(self, wrench_cmd_world: np.ndarray | None = None,
                     learn_mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -279,6 +279,8 @@ class ImpactController:
             raise invalid_quaternion(quat_target_world)
         if flags & (kernels.STORE | kernels.TRAIN):
             self.internal_model.learn(flags, self.slow_filter.wrench_slow_world, mask)
+        if flags & kernels.DIVERGED:
+            self.internal_model.diverged()
         if flags & kernels.NON_FINITE:
             raise SimulationError(f"non-finite torque command {self.limiter.output!r}")
 

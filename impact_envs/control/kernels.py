@@ -30,6 +30,7 @@ from impact_envs.control.internal_model.kernels import (
     model_views,
     push_features,
 )
+from impact_envs.control.internal_model.learner import DIVERGED, learner_tick
 from impact_envs.control.kernel_layout import (
     APPLY_FEEDFORWARD,
     BAD_INPUT,
@@ -56,7 +57,7 @@ from impact_envs.control.limits import limiter_views, torque_limiter
 from impact_envs.control.slow_filter import slow_filter_update, slow_filter_views
 
 __all__ = [
-    "BAD_INPUT", "BAD_QUAT", "NON_FINITE", "STORE", "TRAIN", "ControllerState",
+    "BAD_INPUT", "BAD_QUAT", "DIVERGED", "NON_FINITE", "STORE", "TRAIN", "ControllerState",
     "controller_tick", "first_bad_input", "limiter_views",
 ]
 
@@ -110,6 +111,7 @@ class ControllerState(NamedTuple):
     weights: tuple
     biases: tuple
     model: np.ndarray
+    learner: tuple
     imp: np.ndarray
     lim: np.ndarray
 
@@ -126,7 +128,7 @@ def controller_tick(
     closed loop's ``loop_tick`` in its own call, once per tick); a zero quaternion returns
     ``BAD_QUAT`` before anything is written.
     """
-    ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, imp, lim = state
+    ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, learner, imp, lim = state
     par, sig_cmd, w_extra, scalars, w_ff = controller_views(ctl)
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
@@ -146,7 +148,9 @@ def controller_tick(
     if run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
         model_predict(model32, weights, biases, model)
-        flags = model_gate_step(slow_filter_views(sf)[4], slow_rate, mask, model)
+        w_slow = slow_filter_views(sf)[4]
+        flags = model_gate_step(w_slow, slow_rate, mask, model)
+        flags = learner_tick(flags, w_slow, mask, model32, model, weights, biases, learner)
     for i in range(6):
         sig_cmd[i] = wrench_cmd[i]
         if par[APPLY_FEEDFORWARD] == 0.0:

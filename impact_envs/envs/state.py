@@ -117,10 +117,12 @@ def _live_arrays(env: ImpactEnv) -> dict[str, np.ndarray]:
         "estimator": ctrl.estimator.buffer, "slow_filter": ctrl.slow_filter.buffer,
         "impedance": ctrl.impedance.buffer, "limiter": ctrl.limiter.buffer,
         "model32": im.kernel_args()[0], "model64": im.buffer,
-        "replay_inputs": im.replay.inputs, "replay_targets": im.replay.targets,
-        "replay_masks": im.replay.masks, "tau_bias": sim._tau_bias, "tau_applied": sim.tau_applied,
+        "tau_bias": sim._tau_bias, "tau_applied": sim.tau_applied,
         "q_model": dyn.q_model, "dq_model": dyn.dq_model,
     }
+    for name, value in im.learner._asdict().items():  # replay ring, pending step, counters
+        parts = value if isinstance(value, tuple) else (value,)
+        arrays.update({f"learner_{name}_{i}": part for i, part in enumerate(parts)})
     arrays.update({f"arm_{k}": v for k, v in dyn.model_arrays._asdict().items()})
     return arrays
 
@@ -140,8 +142,7 @@ def capture(env: ImpactEnv) -> EnvState:
         data=copy.deepcopy(env.sim.data),
         arrays={k: v.copy() for k, v in _live_arrays(env).items()},
         weights={k: v.detach().clone() for k, v in im.net.state_dict().items()},
-        learner={"count": im.replay.count, "head": im.replay._head,
-                 "replay_rng": copy.deepcopy(im.replay._rng), "n_updates": im.n_updates,
+        learner={"replay_rng": copy.deepcopy(im.replay._rng),
                  "n_divergences": im.n_divergences, "is_reset": env.controller._is_reset},
         task=copy.deepcopy(env.task.__dict__),
         env=copy.deepcopy({k: getattr(env, k, None) for k in ENV_FIELDS}),
@@ -167,9 +168,8 @@ def restore(env: ImpactEnv, state: EnvState) -> None:
         for name, tensor in im.net.state_dict().items():
             tensor.copy_(state.weights[name])
     learner = state.learner
-    im.replay.count, im.replay._head = learner["count"], learner["head"]
     im.replay._rng = copy.deepcopy(learner["replay_rng"])
-    im.n_updates, im.n_divergences = learner["n_updates"], learner["n_divergences"]
+    im.n_divergences = learner["n_divergences"]
     ctrl._is_reset = learner["is_reset"]
     ctrl._fill_signals()
     env.task.__dict__.update(copy.deepcopy(state.task))

@@ -5,7 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from impact_envs.control.validation import check_positive
-from impact_envs.errors import InvalidArgumentError
+from impact_envs.errors import InvalidArgumentError, check_choice
+
+LEARNERS: tuple[str, ...] = ("numpy", "numba")
+"""Valid ``InternalModelConfig.learner`` values."""
 
 
 @dataclass(frozen=True)
@@ -29,6 +32,12 @@ class InternalModelConfig:
         replay_capacity: FIFO capacity of the replay buffer [samples] (own choice: 256).
         replay_period: Ticks between stored quasi-steady samples (own choice: 10, i.e. 10 ms).
         seed: Seed of the weight initialisation and of replay sampling.
+        learner: Where replay and SGD run: ``"numpy"`` (in Python after the tick, NumPy BLAS,
+            one whole step on its tick: the learner of every published table) or
+            ``"numba"`` (inside the tick, spread over ticks: a bounded tick,
+            ``internal_model/learner.py``).
+        samples_per_tick: With ``learner="numba"``, batch samples processed per tick (own
+            choice 4: a batch-16 step over 4 ticks; docs/controller.md "A bounded tick").
         wrench_feature: Feed the estimated wrench to the network (default True, as both
             presets). False zeroes those six inputs, so the model predicts from the robot's
             state (joints, gripper, TCP position) alone; an experiment, docs/results.md §1.
@@ -45,6 +54,8 @@ class InternalModelConfig:
     replay_capacity: int = 256
     replay_period: int = 10
     seed: int = 0
+    learner: str = "numpy"
+    samples_per_tick: int = 4
     wrench_feature: bool = True
 
     def __post_init__(self) -> None:
@@ -58,6 +69,16 @@ class InternalModelConfig:
             raise InvalidArgumentError(
                 f"invalid hidden_sizes {self.hidden_sizes!r}; valid: non-empty, all >= 1"
             )
+        check_choice("internal_model.learner", self.learner, LEARNERS)
+        if self.samples_per_tick < 1:
+            raise InvalidArgumentError(
+                f"invalid samples_per_tick {self.samples_per_tick!r}; valid: >= 1")
+        ticks_per_step = -(-self.batch_size // self.samples_per_tick)
+        if self.learner == "numba" and ticks_per_step > self.update_every:
+            raise InvalidArgumentError(
+                f"invalid samples_per_tick {self.samples_per_tick!r}; valid: >= batch_size / "
+                f"update_every = {self.batch_size}/{self.update_every} (a step must end before "
+                "the next one starts)")
         check_positive("learning_rate", self.learning_rate)
         check_positive("surprise_open_n", self.surprise_open_n)
         check_positive("surprise_release_n", self.surprise_release_n, allow_zero=True)

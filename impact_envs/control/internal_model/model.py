@@ -24,6 +24,12 @@ from safetensors.torch import load_file, save_file
 from impact_envs.control.internal_model import kernels
 from impact_envs.control.internal_model.config import InternalModelConfig
 from impact_envs.control.internal_model.gate import SurpriseGate
+from impact_envs.control.internal_model.learner import (
+    N_UPDATES,
+    PENDING,
+    LearnerArrays,
+    make_learner,
+)
 from impact_envs.control.internal_model.net import (
     FEATURE_DIM,
     FEATURE_NAMES,
@@ -76,8 +82,15 @@ class InternalModel:
         cfg = self.config
         self.input_dim = cfg.history_length * FEATURE_DIM
         self.net = build_network(cfg)
-        self.replay = ReplayBuffer(cfg.replay_capacity, self.input_dim, 6, seed=cfg.seed)
-        self.n_updates = 0
+        weights = tuple(m.weight.detach().numpy() for m in self.net
+                        if isinstance(m, torch.nn.Linear))
+        self.learner: LearnerArrays = make_learner(
+            cfg.replay_capacity, cfg.batch_size, self.input_dim, weights, cfg.learning_rate,
+            cfg.samples_per_tick, cfg.learner == "numba")
+        lrn = self.learner
+        self.replay = ReplayBuffer(cfg.replay_capacity, self.input_dim, 6, seed=cfg.seed,
+                                   storage=(lrn.inputs, lrn.targets, lrn.masks, lrn.scal))
+        self._reseed_learner()
         self.n_divergences = 0
         self._init_kernel_buffers()
         self.gate = SurpriseGate(cfg.surprise_open_n, cfg.surprise_release_n, cfg.slow_rate_max,
@@ -113,6 +126,20 @@ class InternalModel:
 
     # ----------------------------------------------------------------- state management
     @property
+    def n_updates(self) -> int:
+        """SGD steps taken since construction / ``reinitialize``."""
+        return int(self.learner.scal[N_UPDATES])
+
+    @n_updates.setter
+    def n_updates(self, value: int) -> None:
+        self.learner.scal[N_UPDATES] = value
+
+    def _reseed_learner(self) -> None:
+        """Drop a pending in-kernel SGD step and reseed its replay sampler."""
+        self.learner.scal[PENDING] = 0.0
+        self.learner.rng[0] = np.uint64(self.config.seed)
+
+    @property
     def surprise_n(self) -> float:
         """Force surprise of the last tick [N]."""
         return float(self._state[4])
@@ -143,14 +170,15 @@ class InternalModel:
         self._biases = tuple(m.bias.detach().numpy() for m in linears)
 
     def kernel_args(self) -> tuple:
-        """(float32 buffer, weights, biases, float64 buffer) of the internal-model kernels."""
-        return self._buf32, self._weights, self._biases, self.buffer
+        """(float32 buffer, weights, biases, float64 buffer, learner) of the model kernels."""
+        return self._buf32, self._weights, self._biases, self.buffer, self.learner
 
     def reset_history(self) -> None:
         """Clear the history, gate and prediction; keep weights and replay samples."""
         self._hist.fill(0.0)
         self._state.fill(0.0)  # head, filled, tick, gate, surprise, learning
         self.wrench_pred_world.fill(0.0)
+        self._reseed_learner()
 
     def reinitialize(self) -> None:
         """Restore the seeded initial weights, clear the replay buffer and the history."""
@@ -187,7 +215,7 @@ class InternalModel:
 
     def predict(self) -> np.ndarray:
         """Forward pass on the current history -> ``wrench_pred_world`` (6,) [N, Nm]."""
-        kernels.model_predict(*self.kernel_args())
+        kernels.model_predict(*self.kernel_args()[:4])
         return self.wrench_pred_world
 
     def predict_torch(self, x: np.ndarray | None = None) -> np.ndarray:
@@ -261,9 +289,14 @@ class InternalModel:
             loss = sgd_step(self._weights, self._biases, bx, by, bm, self.config.learning_rate)
         self.n_updates += 1  # the fast path shares the weights' memory: no refresh
         if not (math.isfinite(loss) and self._parameters_finite()):
-            self.reinitialize()  # diverged (inputs far outside any payload): start over
-            self.n_divergences += 1
+            self.diverged()
         return loss
+
+    def diverged(self) -> None:
+        """After an SGD step left a non-finite loss or weight (inputs far outside any
+        payload): re-initialise (seeded weights, empty replay) and count it."""
+        self.reinitialize()
+        self.n_divergences += 1
 
     def _parameters_finite(self) -> bool:
         """Whether every weight and bias is finite (~6 us, once per SGD step)."""

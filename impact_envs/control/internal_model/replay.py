@@ -4,9 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from impact_envs.control.internal_model.learner import COUNT, HEAD, SCAL_SIZE
+
 
 class ReplayBuffer:
     """Preallocated ring buffer; the oldest sample is overwritten when full.
+
+    The arrays may be views of an ``InternalModel``'s learner (``learner.LearnerArrays``): the
+    in-kernel learner and this class then read and write the same ring.
 
     Attributes:
         inputs: (capacity, input_dim) float32 normalized histories.
@@ -15,16 +20,36 @@ class ReplayBuffer:
         count: Number of valid samples.
     """
 
-    def __init__(self, capacity: int, input_dim: int, output_dim: int, seed: int = 0) -> None:
-        """Allocate storage for ``capacity`` samples; ``seed`` drives ``sample``."""
+    def __init__(self, capacity: int, input_dim: int, output_dim: int, seed: int = 0,
+                 storage: tuple[np.ndarray, ...] | None = None) -> None:
+        """Allocate storage for ``capacity`` samples, or use ``storage`` = (inputs, targets,
+        masks, scal) of a learner (``scal`` holds count and head); ``seed`` drives
+        ``sample_indices``."""
         self.capacity = capacity
-        self.inputs = np.zeros((capacity, input_dim), dtype=np.float32)
-        self.targets = np.zeros((capacity, output_dim), dtype=np.float32)
-        self.masks = np.zeros((capacity, output_dim), dtype=np.float32)
-        self.count = 0
-        self._head = 0
+        if storage is None:
+            storage = (np.zeros((capacity, input_dim), dtype=np.float32),
+                       np.zeros((capacity, output_dim), dtype=np.float32),
+                       np.zeros((capacity, output_dim), dtype=np.float32), np.zeros(SCAL_SIZE))
+        self.inputs, self.targets, self.masks, self._scal = storage
         self._seed = seed
         self._rng = np.random.default_rng(seed)
+
+    @property
+    def count(self) -> int:
+        """Number of valid samples."""
+        return int(self._scal[COUNT])
+
+    @count.setter
+    def count(self, value: int) -> None:
+        self._scal[COUNT] = value
+
+    @property
+    def _head(self) -> int:
+        return int(self._scal[HEAD])
+
+    @_head.setter
+    def _head(self, value: int) -> None:
+        self._scal[HEAD] = value
 
     def clear(self) -> None:
         """Drop all samples and reseed the sampler."""
