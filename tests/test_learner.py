@@ -132,3 +132,16 @@ def test_spread_must_finish_before_the_next_step() -> None:
         InternalModelConfig(learner="numba", samples_per_tick=2, update_every=5, batch_size=16)
     with pytest.raises(InvalidArgumentError, match="numpy"):
         InternalModelConfig(learner="torch")
+
+
+def test_tick_latency_benchmark_runs_and_reports_both_learners(tmp_path) -> None:
+    import json
+
+    from impact_eval.experiments import tick_latency
+
+    assert tick_latency.main(["--seconds", "0.3", "--switch-s", "0.1", "--out",
+                              str(tmp_path)]) == 0
+    report = json.loads((tmp_path / "latency.json").read_text())
+    for learner in ("numpy", "numba"):
+        assert report[learner]["all"]["ticks"] == 300
+        assert report[learner]["sgd_steps"] > 0  # the payload switches made it learn
