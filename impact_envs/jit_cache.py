@@ -24,6 +24,7 @@ from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 KERNEL_SOURCES = (
+    "control/contact_guard.py",
     "control/estimators.py",
     "control/impedance.py",
     "control/internal_model/kernels.py",

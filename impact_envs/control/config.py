@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from impact_envs.control.contact_guard import ContactGuardConfig
 from impact_envs.control.estimators import ESTIMATOR_KINDS, EstimatorConfig
 from impact_envs.control.impedance import ImpedanceConfig
 from impact_envs.control.internal_model.config import InternalModelConfig
@@ -29,9 +30,9 @@ from impact_envs.control.slow_filter import SlowWrenchConfig
 from impact_envs.control.validation import check_positive
 from impact_envs.errors import InvalidArgumentError
 
-__all__ = ["ESTIMATOR_KINDS", "ControllerConfig", "EstimatorConfig", "ImpedanceConfig",
-           "InternalModelConfig", "LimitsConfig", "SlowWrenchConfig", "beyond_hardware_limits",
-           "libfranka_limits"]
+__all__ = ["ESTIMATOR_KINDS", "ContactGuardConfig", "ControllerConfig", "EstimatorConfig",
+           "ImpedanceConfig", "InternalModelConfig", "LimitsConfig", "SlowWrenchConfig",
+           "beyond_hardware_limits", "libfranka_limits"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,7 @@ class ControllerConfig:
         slow_wrench: Slow-wrench filter settings.
         internal_model: Internal model / online learning settings.
         limits: Torque and torque-rate limits.
+        guard: Contact guard and bounds on the feedforward wrench (``contact_guard.py``).
     """
 
     dt_s: float = 0.001
@@ -53,6 +55,7 @@ class ControllerConfig:
     slow_wrench: SlowWrenchConfig = field(default_factory=SlowWrenchConfig)
     internal_model: InternalModelConfig = field(default_factory=InternalModelConfig)
     limits: LimitsConfig = field(default_factory=LimitsConfig)
+    guard: ContactGuardConfig = field(default_factory=ContactGuardConfig)
 
     def __post_init__(self) -> None:
         check_positive("dt_s", self.dt_s)

@@ -16,6 +16,7 @@ import torch
 from impact_envs.control import kernels
 from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
 from impact_envs.control.config import ControllerConfig
+from impact_envs.control.contact_guard import ContactGuard
 from impact_envs.control.estimators import make_estimator
 from impact_envs.control.impedance import CartesianImpedance
 from impact_envs.control.internal_model import InternalModel
@@ -113,6 +114,8 @@ class ImpactController:
         self.slow_filter = SlowWrenchFilter(cfg.slow_wrench, cfg.dt_s)
         self.internal_model = InternalModel(cfg.internal_model)
         self.limiter = TorqueLimiter(cfg.limits, cfg.dt_s)
+        self.guard = ContactGuard(cfg.guard, cfg.dt_s,
+                                  min(cfg.impedance.stiffness_translational_n_per_m))
         # Signal arrays alias the stages' output buffers (all written in place every tick).
         w_pred = self.internal_model.wrench_pred_world
         self.signals = ControllerSignals(
@@ -159,6 +162,7 @@ class ImpactController:
         self.estimator.reset()
         self.slow_filter.reset()
         self.limiter.reset()
+        self.guard.reset()
         if keep_internal_model:
             self.internal_model.reset_history()
         else:
@@ -241,7 +245,7 @@ class ImpactController:
             ctl=self.buffer, grams=self._grams, wrench_maps=self.wrench_maps,
             est=self.estimator.buffer, sf=self.slow_filter.buffer, model32=model32,
             weights=weights, biases=biases, model=model, learner=learner,
-            imp=self.impedance.buffer, lim=self.limiter.buffer)
+            guard=self.guard.buffer, imp=self.impedance.buffer, lim=self.limiter.buffer)
 
     def loop_inputs(self, wrench_cmd_world: np.ndarray | None = None,
                     learn_mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -278,7 +282,7 @@ class ImpactController:
         if flags & kernels.BAD_QUAT:
             raise invalid_quaternion(quat_target_world)
         if flags & (kernels.STORE | kernels.TRAIN):
-            self.internal_model.learn(flags, self.slow_filter.wrench_slow_world, mask)
+            self.internal_model.learn(flags, self.guard.target, mask)
         if flags & kernels.DIVERGED:
             self.internal_model.diverged()
         if flags & kernels.NON_FINITE:

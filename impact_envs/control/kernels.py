@@ -22,6 +22,11 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from impact_envs.control.contact_guard import (
+    contact_guard_step,
+    guard_feedforward,
+    guard_views,
+)
 from impact_envs.control.estimators import momentum_update, residual_update
 from impact_envs.control.impedance import impedance_law, impedance_views
 from impact_envs.control.internal_model.kernels import (
@@ -112,6 +117,7 @@ class ControllerState(NamedTuple):
     biases: tuple
     model: np.ndarray
     learner: tuple
+    guard: np.ndarray
     imp: np.ndarray
     lim: np.ndarray
 
@@ -128,7 +134,8 @@ def controller_tick(
     closed loop's ``loop_tick`` in its own call, once per tick); a zero quaternion returns
     ``BAD_QUAT`` before anything is written.
     """
-    ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, learner, imp, lim = state
+    (ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, learner, guard, imp,
+     lim) = state
     par, sig_cmd, w_extra, scalars, w_ff = controller_views(ctl)
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
@@ -148,9 +155,10 @@ def controller_tick(
     if run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
         model_predict(model32, weights, biases, model)
-        w_slow = slow_filter_views(sf)[4]
-        flags = model_gate_step(w_slow, slow_rate, mask, model)
-        flags = learner_tick(flags, w_slow, mask, model32, model, weights, biases, learner)
+        contact_guard_step(pred, dyn.pos_ee_world, pos_target, slow_filter_views(sf)[4], guard)
+        target = guard_views(guard)[2]  # w_slow; force axes held by the guard replaced
+        flags = model_gate_step(target, slow_rate, mask, model)
+        flags = learner_tick(flags, target, mask, model32, model, weights, biases, learner)
     for i in range(6):
         sig_cmd[i] = wrench_cmd[i]
         if par[APPLY_FEEDFORWARD] == 0.0:
@@ -159,6 +167,9 @@ def controller_tick(
             w_ff[i] = pred[i]
         # else: a masked axis keeps the feedforward of its last unmasked tick (its prediction
         # follows input features that the commanded contact changes: positive feedback)
+    if run_model:
+        guard_feedforward(w_ff, guard)  # hold and bounds (a no-op when disabled)
+    for i in range(6):
         w_extra[i] = w_ff[i] + wrench_cmd[i]
     wrench_map_null = wrench_maps[0] if shared else wrench_maps[1]
     impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, w_extra, imp)

@@ -116,6 +116,7 @@ def _live_arrays(env: ImpactEnv) -> dict[str, np.ndarray]:
         "controller": ctrl.buffer, "grams": ctrl._grams, "wrench_maps": ctrl.wrench_maps,
         "estimator": ctrl.estimator.buffer, "slow_filter": ctrl.slow_filter.buffer,
         "impedance": ctrl.impedance.buffer, "limiter": ctrl.limiter.buffer,
+        "guard": ctrl.guard.buffer,
         "model32": im.kernel_args()[0], "model64": im.buffer,
         "tau_bias": sim._tau_bias, "tau_applied": sim.tau_applied,
         "q_model": dyn.q_model, "dq_model": dyn.dq_model,
