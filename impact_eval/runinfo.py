@@ -74,12 +74,29 @@ def utc_now() -> str:
 
 
 def host_info() -> dict[str, object]:
-    """Python, platform and CPU count (context for wall times)."""
+    """Python, platform, CPU model, widest SIMD and CPU count (context for wall times, and for
+    bytes that differ on another CPU: the compiled kernels and libraries pick their code paths
+    by instruction set, docs/results.md "Reproducibility")."""
     return {
         "python": sys.version.split()[0],
         "platform": platform.platform(),
+        **cpu_info(),
         "cpu_count": os.cpu_count(),
     }
+
+
+def cpu_info() -> dict[str, str]:
+    """``cpu_model`` and ``simd`` (avx512 / avx2 / sse4_2 / other) from /proc/cpuinfo."""
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return {"cpu_model": platform.processor() or "unknown", "simd": "unknown"}
+    fields = {k.strip(): v.strip() for k, v in (line.split(":", 1) for line in
+                                                  text.splitlines()[:40] if ":" in line)}
+    flags = set(fields.get("flags", "").split())
+    simd = next((name for name, flag in (("avx512", "avx512f"), ("avx2", "avx2"),
+                                         ("sse4_2", "sse4_2")) if flag in flags), "other")
+    return {"cpu_model": fields.get("model name", "unknown"), "simd": simd}
 
 
 def _read_object(path: Path) -> dict | None:

@@ -53,7 +53,7 @@ def test_bounds_limit_the_rate_and_size_of_the_feedforward() -> None:
     applied = []
     for _ in range(400):
         w = np.array([400.0, 0.0, -300.0, 0.0, 60.0, 0.0])
-        guard_feedforward(w, guard.buffer)
+        guard_feedforward(w, np.ones(6), guard.buffer)
         applied.append(w.copy())
     applied = np.asarray(applied)
     steps = np.linalg.norm(np.diff(applied[:, :3], axis=0), axis=1)
@@ -67,7 +67,7 @@ def test_disabled_guard_changes_nothing() -> None:
     guard = ContactGuard(ContactGuardConfig(), 0.001, 400.0)
     w = np.array([4000.0, 0.0, -3000.0, 0.0, 600.0, 0.0])
     before = w.copy()
-    guard_feedforward(w, guard.buffer)
+    guard_feedforward(w, np.ones(6), guard.buffer)
     np.testing.assert_array_equal(w, before)
     assert ControllerConfig().guard == ContactGuardConfig(enabled=False)
 

@@ -13,17 +13,20 @@ Force part, as vectors in the world frame, every tick (``contact_guard_step``):
    target, so that a moving target is not read as the TCP giving) and slow estimate ``e0``.
 2. When the prediction has grown by ``growth_step_n`` (``g = f - f0``) in a direction that is not
    upward (``g_z < upward_cos * |g|``: lifting a load that still rests on something is how
-   heavy objects are lifted, the lift ratchet), the guard waits ``follow_delay_s``, then calls
-   the contact **blocked** if the offset moved less than ``give_fraction * |g| / K`` along ``g``,
-   the TCP did not retreat against ``g`` by as much either (that is an external force that
-   just changed, e.g. a push, not a contact that does not give), **and** the slow estimate rose by at least ``follow_fraction * |g|`` along ``g`` (it follows
-   the feedforward: the contact pushes back). Otherwise the growth is accepted and a new window
-   starts.
+   heavy objects are lifted, the lift ratchet) and not mostly a decrease of ``f0`` (``g . f0 <=
+   -upward_cos |g| |f0|``: it only makes a press smaller), both checked again after the wait,
+   the guard waits ``follow_delay_s``, then calls the contact **blocked** if the offset moved
+   less than ``give_fraction * |g| / K`` along ``g``, the TCP did not retreat against ``g`` by
+   as much either (that is an external force that just changed, e.g. a push, not a contact
+   that does not give), **and** the slow estimate rose by at least ``follow_fraction * |g|``
+   along ``g`` (it follows the feedforward: the contact pushes back). Otherwise the growth is
+   accepted and a new window starts.
 3. Blocked: the force feedforward is held at ``f0`` (the value before the growth) and the model
    is trained toward it on the force axes (the training target is ``f0``, not the estimate),
    so the prediction does not keep climbing behind the hold. The hold ends when the TCP has
-   moved ``release_move_m`` from where it started or the prediction has fallen
-   ``growth_step_n`` below the hold along ``g``.
+   moved ``release_move_m`` from where it started, the prediction has fallen
+   ``growth_step_n`` below the hold along ``g``, or after ``probe_after_s`` (a new window
+   then tests the contact again; it is re-held at the same value if it still does not give).
 
 Then the applied feedforward is bounded: its rate (force ``force_rate_max_n_per_s``, torque
 ``torque_rate_max_nm_per_s``) and its size (``force_max_n``, ``torque_max_nm``), both as
@@ -44,7 +47,7 @@ from impact_envs.control.kernel_layout import _next
 from impact_envs.control.validation import check_positive
 from impact_envs.errors import InvalidArgumentError
 
-GUARD_SIZE = 12 + 33 + 6
+GUARD_SIZE = 13 + 33 + 6
 """Length of the guard's float64 buffer (``guard_views``)."""
 OPEN, WINDOW, WAIT, HOLD = 0.0, 1.0, 2.0, 3.0
 """Phases (state[0]): no window yet, window open, growth seen (waiting), holding."""
@@ -63,8 +66,12 @@ class ContactGuardConfig:
             the arm's translational time constant with a 5 kg load is about 0.1 s).
         give_fraction: Blocked if the TCP moved less than this fraction of |g| / K along g.
         follow_fraction: ... and the slow estimate rose by at least this fraction of |g|.
-        upward_cos: Growth with g_z >= upward_cos |g| is never blocked (the lift ratchet).
+        upward_cos: Growth with g_z >= upward_cos |g| is never blocked (the lift ratchet),
+            nor growth with g . f0 <= -upward_cos |g| |f0| (a decrease of the force).
         release_move_m: A hold ends when the TCP moved this far from where it began [m].
+        probe_after_s: ... and after this long [s], to test the contact again: a new window
+            starts at the held value (the model was trained toward it), so a contact that
+            still does not give is held again at the same value, one growth step later.
         force_max_n: Bound on the norm of the force feedforward [N].
         torque_max_nm: Bound on the norm of the torque feedforward [Nm].
         force_rate_max_n_per_s: Bound on the rate of the force feedforward [N/s].
@@ -78,6 +85,7 @@ class ContactGuardConfig:
     follow_fraction: float = 0.25
     upward_cos: float = 0.7
     release_move_m: float = 0.002
+    probe_after_s: float = 1.0
     force_max_n: float = 150.0
     torque_max_nm: float = 20.0
     force_rate_max_n_per_s: float = 1000.0
@@ -85,6 +93,7 @@ class ContactGuardConfig:
 
     def __post_init__(self) -> None:
         for name in ("growth_step_n", "follow_delay_s", "give_fraction", "release_move_m",
+                     "probe_after_s",
                      "force_max_n", "torque_max_nm", "force_rate_max_n_per_s",
                      "torque_rate_max_nm_per_s"):
             check_positive(name, getattr(self, name))
@@ -99,20 +108,21 @@ def guard_parameters(cfg: ContactGuardConfig, dt_s: float, stiffness_n_per_m: fl
     return (float(cfg.enabled), cfg.growth_step_n, round(cfg.follow_delay_s / dt_s),
             cfg.give_fraction, cfg.follow_fraction, cfg.upward_cos, cfg.release_move_m,
             1.0 / stiffness_n_per_m, cfg.force_max_n, cfg.torque_max_nm,
-            cfg.force_rate_max_n_per_s * dt_s, cfg.torque_rate_max_nm_per_s * dt_s)
+            cfg.force_rate_max_n_per_s * dt_s, cfg.torque_rate_max_nm_per_s * dt_s,
+            round(cfg.probe_after_s / dt_s))
 
 
 @njit(cache=True)
 def guard_views(buf):
-    """(par (12), state (33), target (6)) of the guard buffer.
+    """(par (13), state (33), target (6)) of the guard buffer.
 
-    par = ``guard_parameters``; state = [phase, ticks waited, holds started, f0 (3), p0 (3),
+    par = ``guard_parameters``; state = [phase, ticks waited or held, holds started, f0 (3), p0 (3),
     e0 (3), hold force (3), hold position (3), growth direction (3), previous feedforward (6),
     this tick's tracking offset (3), TCP position at the window's start (3)]; p0 is a
     tracking offset (TCP - target);
     target = this tick's training target (the slow wrench, force axes replaced by the hold).
     """
-    par, o = _next(buf, 0, 12)
+    par, o = _next(buf, 0, 13)
     state, o = _next(buf, o, 33)
     target, o = _next(buf, o, 6)
     return par, state, target
@@ -127,9 +137,12 @@ def _start_window(state, pred, offset, w_slow, pos) -> None:
 
 
 @njit(cache=True)
-def _growth(state, pred):
-    """(g_x, g_y, g_z, |g|): growth of the predicted force since the window began."""
-    gx, gy, gz = pred[0] - state[3], pred[1] - state[4], pred[2] - state[5]
+def _growth(state, pred, mask):
+    """(g_x, g_y, g_z, |g|): growth of the predicted force since the window began, on the
+    axes the model learns (a masked axis carries a commanded force, not a learned one)."""
+    gx = (pred[0] - state[3]) if mask[0] != 0.0 else 0.0
+    gy = (pred[1] - state[4]) if mask[1] != 0.0 else 0.0
+    gz = (pred[2] - state[5]) if mask[2] != 0.0 else 0.0
     return gx, gy, gz, math.sqrt(gx * gx + gy * gy + gz * gz)
 
 
@@ -137,6 +150,17 @@ def _growth(state, pred):
 def _along(a, b, off, gx, gy, gz, size) -> float:
     """(a - b[off:off+3]) . g / |g|."""
     return ((a[0] - b[off]) * gx + (a[1] - b[off + 1]) * gy + (a[2] - b[off + 2]) * gz) / size
+
+
+@njit(cache=True)
+def _exempt(par, state, gx, gy, gz, size) -> bool:
+    """Growth never held: upward (the lift ratchet), or mostly a decrease of the force the
+    window began with (g against f0: the press it could build only gets smaller)."""
+    if gz >= par[5] * size:
+        return True
+    f0x, f0y, f0z = state[3], state[4], state[5]
+    f0 = math.sqrt(f0x * f0x + f0y * f0y + f0z * f0z)
+    return gx * f0x + gy * f0y + gz * f0z <= -par[5] * size * f0
 
 
 @njit(cache=True)
@@ -151,11 +175,12 @@ def _blocked(par, state, gx, gy, gz, size, offset, w_slow, pos) -> bool:
 
 
 @njit(cache=True)
-def contact_guard_step(pred, pos, pos_target, w_slow, buf) -> None:
+def contact_guard_step(pred, pos, pos_target, w_slow, mask, buf) -> None:
     """Advance the blocked test; write the training target (``guard_views``).
 
     ``pos`` / ``pos_target``: TCP position and its target [m]: the give is measured on the
-    tracking offset ``pos - pos_target``, so a moving target is not read as a give.
+    tracking offset ``pos - pos_target``, so a moving target is not read as a give. ``mask``:
+    the learning mask; masked force axes are neither tested nor held.
     """
     par, state, target = guard_views(buf)
     for i in range(6):
@@ -167,10 +192,10 @@ def contact_guard_step(pred, pos, pos_target, w_slow, buf) -> None:
         offset[i] = pos[i] - pos_target[i]
     if state[0] == OPEN:
         _start_window(state, pred, offset, w_slow, pos)
-    gx, gy, gz, size = _growth(state, pred)
+    gx, gy, gz, size = _growth(state, pred, mask)
     if state[0] == WINDOW and size >= par[1]:
-        if gz >= par[5] * size:
-            _start_window(state, pred, offset, w_slow, pos)  # upward: the lift ratchet is free
+        if _exempt(par, state, gx, gy, gz, size):
+            _start_window(state, pred, offset, w_slow, pos)
         else:
             state[0], state[1] = WAIT, 0.0
     elif state[0] == WAIT:
@@ -178,24 +203,27 @@ def contact_guard_step(pred, pos, pos_target, w_slow, buf) -> None:
         if size < par[1]:
             state[0] = WINDOW  # the growth went away again: keep the window
         elif state[1] >= par[2]:
-            if _blocked(par, state, gx, gy, gz, size, offset, w_slow, pos):
-                state[0], state[2] = HOLD, state[2] + 1.0
+            exempt = _exempt(par, state, gx, gy, gz, size)  # re-checked: g may have turned
+            if not exempt and _blocked(par, state, gx, gy, gz, size, offset, w_slow, pos):
+                state[0], state[1], state[2] = HOLD, 0.0, state[2] + 1.0
                 for i in range(3):
                     state[12 + i], state[15 + i] = state[3 + i], pos[i]
                 state[18], state[19], state[20] = gx / size, gy / size, gz / size
             else:
                 _start_window(state, pred, offset, w_slow, pos)
     elif state[0] == HOLD:
+        state[1] += 1.0
         moved_sq = fall = 0.0
         for i in range(3):
             d = pos[i] - state[15 + i]
             moved_sq += d * d
             fall += (state[12 + i] - pred[i]) * state[18 + i]
-        if moved_sq > par[6] * par[6] or fall > par[1]:
+        if moved_sq > par[6] * par[6] or fall > par[1] or state[1] >= par[12]:
             _start_window(state, pred, offset, w_slow, pos)
     if state[0] == HOLD:
         for i in range(3):
-            target[i] = state[12 + i]
+            if mask[i] != 0.0:
+                target[i] = state[12 + i]
 
 
 @njit(cache=True)
@@ -216,14 +244,16 @@ def _bound_rate_and_norm(w_ff, prev, lo, rate_max, norm_max) -> None:
 
 
 @njit(cache=True)
-def guard_feedforward(w_ff, buf) -> None:
-    """Apply the hold and the bounds to this tick's feedforward ``w_ff`` (6,) in place."""
+def guard_feedforward(w_ff, mask, buf) -> None:
+    """Apply the hold (unmasked force axes) and the bounds to this tick's feedforward ``w_ff``
+    (6,) in place."""
     par, state, _ = guard_views(buf)
     if par[0] == 0.0:
         return
     if state[0] == HOLD:
         for i in range(3):
-            w_ff[i] = state[12 + i]
+            if mask[i] != 0.0:
+                w_ff[i] = state[12 + i]
     prev = state[21:27]
     _bound_rate_and_norm(w_ff, prev, 0, par[10], par[8])
     _bound_rate_and_norm(w_ff, prev, 3, par[11], par[9])

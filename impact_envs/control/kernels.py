@@ -155,7 +155,8 @@ def controller_tick(
     if run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
         model_predict(model32, weights, biases, model)
-        contact_guard_step(pred, dyn.pos_ee_world, pos_target, slow_filter_views(sf)[4], guard)
+        contact_guard_step(pred, dyn.pos_ee_world, pos_target, slow_filter_views(sf)[4], mask,
+                           guard)
         target = guard_views(guard)[2]  # w_slow; force axes held by the guard replaced
         flags = model_gate_step(target, slow_rate, mask, model)
         flags = learner_tick(flags, target, mask, model32, model, weights, biases, learner)
@@ -168,7 +169,7 @@ def controller_tick(
         # else: a masked axis keeps the feedforward of its last unmasked tick (its prediction
         # follows input features that the commanded contact changes: positive feedback)
     if run_model:
-        guard_feedforward(w_ff, guard)  # hold and bounds (a no-op when disabled)
+        guard_feedforward(w_ff, mask, guard)  # hold and bounds (a no-op when disabled)
     for i in range(6):
         w_extra[i] = w_ff[i] + wrench_cmd[i]
     wrench_map_null = wrench_maps[0] if shared else wrench_maps[1]
