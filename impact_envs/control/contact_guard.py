@@ -10,7 +10,7 @@ increment / K and the estimate stays (the load does not change): that difference
 Force part, as vectors in the world frame, every tick (``contact_guard_step``):
 
 1. A window starts with the current prediction ``f0``, tracking offset ``p0`` (TCP minus its
-   target, so that a moving target is not read as the TCP giving) and slow estimate ``e0``.
+   target, so that a moving target is not read as the TCP giving) and raw estimate ``e0``.
 2. When the prediction has grown by ``growth_step_n`` (``g = f - f0``) in a direction that is not
    upward (``g_z < upward_cos * |g|``: lifting a load that still rests on something is how
    heavy objects are lifted, the lift ratchet) and not mostly a decrease of ``f0`` (``g . f0 <=
@@ -18,15 +18,16 @@ Force part, as vectors in the world frame, every tick (``contact_guard_step``):
    the guard waits ``follow_delay_s``, then calls the contact **blocked** if the offset moved
    less than ``give_fraction * |g| / K`` along ``g``, the TCP did not retreat against ``g`` by
    as much either (that is an external force that just changed, e.g. a push, not a contact
-   that does not give), **and** the slow estimate rose by at least ``follow_fraction * |g|``
+   that does not give), **and** the raw estimate rose by at least ``follow_fraction * |g|``
    along ``g`` (it follows the feedforward: the contact pushes back). Otherwise the growth is
    accepted and a new window starts.
-3. Blocked: the force feedforward is held at ``f0`` (the value before the growth) and the model
-   is trained toward it on the force axes (the training target is ``f0``, not the estimate),
+3. Blocked: the force feedforward is held at ``f0`` (the value before the growth) less any
+   push it had along ``g`` (learned before the contact, e.g. while the hand moved toward it:
+   no learned force may press into a contact that does not give), and the model is trained
+   toward it on the force axes (the training target is the hold, not the estimate),
    so the prediction does not keep climbing behind the hold. The hold ends when the TCP has
-   moved ``release_move_m`` from where it started, the prediction has fallen
-   ``growth_step_n`` below the hold along ``g``, or after ``probe_after_s`` (a new window
-   then tests the contact again; it is re-held at the same value if it still does not give).
+   moved ``release_move_m`` from where it started (the contact is gone) or the prediction has
+   fallen ``growth_step_n`` below the hold along ``g``.
 
 Then the applied feedforward is bounded: its rate (force ``force_rate_max_n_per_s``, torque
 ``torque_rate_max_nm_per_s``) and its size (``force_max_n``, ``torque_max_nm``), both as
@@ -47,7 +48,7 @@ from impact_envs.control.kernel_layout import _next
 from impact_envs.control.validation import check_positive
 from impact_envs.errors import InvalidArgumentError
 
-GUARD_SIZE = 13 + 33 + 6
+GUARD_SIZE = 12 + 33 + 6
 """Length of the guard's float64 buffer (``guard_views``)."""
 OPEN, WINDOW, WAIT, HOLD = 0.0, 1.0, 2.0, 3.0
 """Phases (state[0]): no window yet, window open, growth seen (waiting), holding."""
@@ -69,9 +70,6 @@ class ContactGuardConfig:
         upward_cos: Growth with g_z >= upward_cos |g| is never blocked (the lift ratchet),
             nor growth with g . f0 <= -upward_cos |g| |f0| (a decrease of the force).
         release_move_m: A hold ends when the TCP moved this far from where it began [m].
-        probe_after_s: ... and after this long [s], to test the contact again: a new window
-            starts at the held value (the model was trained toward it), so a contact that
-            still does not give is held again at the same value, one growth step later.
         force_max_n: Bound on the norm of the force feedforward [N].
         torque_max_nm: Bound on the norm of the torque feedforward [Nm].
         force_rate_max_n_per_s: Bound on the rate of the force feedforward [N/s].
@@ -85,7 +83,6 @@ class ContactGuardConfig:
     follow_fraction: float = 0.25
     upward_cos: float = 0.7
     release_move_m: float = 0.002
-    probe_after_s: float = 1.0
     force_max_n: float = 150.0
     torque_max_nm: float = 20.0
     force_rate_max_n_per_s: float = 1000.0
@@ -93,7 +90,6 @@ class ContactGuardConfig:
 
     def __post_init__(self) -> None:
         for name in ("growth_step_n", "follow_delay_s", "give_fraction", "release_move_m",
-                     "probe_after_s",
                      "force_max_n", "torque_max_nm", "force_rate_max_n_per_s",
                      "torque_rate_max_nm_per_s"):
             check_positive(name, getattr(self, name))
@@ -108,31 +104,30 @@ def guard_parameters(cfg: ContactGuardConfig, dt_s: float, stiffness_n_per_m: fl
     return (float(cfg.enabled), cfg.growth_step_n, round(cfg.follow_delay_s / dt_s),
             cfg.give_fraction, cfg.follow_fraction, cfg.upward_cos, cfg.release_move_m,
             1.0 / stiffness_n_per_m, cfg.force_max_n, cfg.torque_max_nm,
-            cfg.force_rate_max_n_per_s * dt_s, cfg.torque_rate_max_nm_per_s * dt_s,
-            round(cfg.probe_after_s / dt_s))
+            cfg.force_rate_max_n_per_s * dt_s, cfg.torque_rate_max_nm_per_s * dt_s)
 
 
 @njit(cache=True)
 def guard_views(buf):
-    """(par (13), state (33), target (6)) of the guard buffer.
+    """(par (12), state (33), target (6)) of the guard buffer.
 
-    par = ``guard_parameters``; state = [phase, ticks waited or held, holds started, f0 (3), p0 (3),
+    par = ``guard_parameters``; state = [phase, ticks waited, holds started, f0 (3), p0 (3),
     e0 (3), hold force (3), hold position (3), growth direction (3), previous feedforward (6),
     this tick's tracking offset (3), TCP position at the window's start (3)]; p0 is a
     tracking offset (TCP - target);
     target = this tick's training target (the slow wrench, force axes replaced by the hold).
     """
-    par, o = _next(buf, 0, 13)
+    par, o = _next(buf, 0, 12)
     state, o = _next(buf, o, 33)
     target, o = _next(buf, o, 6)
     return par, state, target
 
 
 @njit(cache=True)
-def _start_window(state, pred, offset, w_slow, pos) -> None:
+def _start_window(state, pred, offset, w_ext, pos) -> None:
     state[0] = WINDOW
     for i in range(3):
-        state[3 + i], state[6 + i], state[9 + i] = pred[i], offset[i], w_slow[i]
+        state[3 + i], state[6 + i], state[9 + i] = pred[i], offset[i], w_ext[i]
         state[30 + i] = pos[i]
 
 
@@ -164,23 +159,37 @@ def _exempt(par, state, gx, gy, gz, size) -> bool:
 
 
 @njit(cache=True)
-def _blocked(par, state, gx, gy, gz, size, offset, w_slow, pos) -> bool:
+def _blocked(par, state, gx, gy, gz, size, offset, w_ext, pos) -> bool:
     """Whether the TCP did not give along g (relative to its target), did not retreat
     against it either (an external force that just changed), while the estimate followed."""
     give = par[3] * size * par[7]
     moved = _along(offset, state, 6, gx, gy, gz, size)
     retreat = -_along(pos, state, 30, gx, gy, gz, size)
-    follow = _along(w_slow, state, 9, gx, gy, gz, size)
+    follow = _along(w_ext, state, 9, gx, gy, gz, size)
     return moved < give and retreat < give and follow >= par[4] * size
 
 
 @njit(cache=True)
-def contact_guard_step(pred, pos, pos_target, w_slow, mask, buf) -> None:
+def _start_hold(state, ux, uy, uz, pos) -> None:
+    """Hold f0 without any push along the blocked direction u: f0 - max(0, f0 . u) u."""
+    state[0], state[1], state[2] = HOLD, 0.0, state[2] + 1.0
+    push = max(0.0, state[3] * ux + state[4] * uy + state[5] * uz)
+    state[12] = state[3] - push * ux
+    state[13] = state[4] - push * uy
+    state[14] = state[5] - push * uz
+    state[15], state[16], state[17] = pos[0], pos[1], pos[2]
+    state[18], state[19], state[20] = ux, uy, uz
+
+
+@njit(cache=True)
+def contact_guard_step(pred, pos, pos_target, w_slow, w_ext, mask, buf) -> None:
     """Advance the blocked test; write the training target (``guard_views``).
 
     ``pos`` / ``pos_target``: TCP position and its target [m]: the give is measured on the
     tracking offset ``pos - pos_target``, so a moving target is not read as a give. ``mask``:
-    the learning mask; masked force axes are neither tested nor held.
+    the learning mask; masked force axes are neither tested nor held. ``w_slow``: the training
+    target it passes on; ``w_ext``: the raw estimate, whose rise the test reads (the slow
+    filter's slew limit lags a fast-growing prediction by more than the test waits).
     """
     par, state, target = guard_views(buf)
     for i in range(6):
@@ -191,11 +200,11 @@ def contact_guard_step(pred, pos, pos_target, w_slow, mask, buf) -> None:
     for i in range(3):
         offset[i] = pos[i] - pos_target[i]
     if state[0] == OPEN:
-        _start_window(state, pred, offset, w_slow, pos)
+        _start_window(state, pred, offset, w_ext, pos)
     gx, gy, gz, size = _growth(state, pred, mask)
     if state[0] == WINDOW and size >= par[1]:
         if _exempt(par, state, gx, gy, gz, size):
-            _start_window(state, pred, offset, w_slow, pos)
+            _start_window(state, pred, offset, w_ext, pos)
         else:
             state[0], state[1] = WAIT, 0.0
     elif state[0] == WAIT:
@@ -204,22 +213,18 @@ def contact_guard_step(pred, pos, pos_target, w_slow, mask, buf) -> None:
             state[0] = WINDOW  # the growth went away again: keep the window
         elif state[1] >= par[2]:
             exempt = _exempt(par, state, gx, gy, gz, size)  # re-checked: g may have turned
-            if not exempt and _blocked(par, state, gx, gy, gz, size, offset, w_slow, pos):
-                state[0], state[1], state[2] = HOLD, 0.0, state[2] + 1.0
-                for i in range(3):
-                    state[12 + i], state[15 + i] = state[3 + i], pos[i]
-                state[18], state[19], state[20] = gx / size, gy / size, gz / size
+            if not exempt and _blocked(par, state, gx, gy, gz, size, offset, w_ext, pos):
+                _start_hold(state, gx / size, gy / size, gz / size, pos)
             else:
-                _start_window(state, pred, offset, w_slow, pos)
+                _start_window(state, pred, offset, w_ext, pos)
     elif state[0] == HOLD:
-        state[1] += 1.0
         moved_sq = fall = 0.0
         for i in range(3):
             d = pos[i] - state[15 + i]
             moved_sq += d * d
             fall += (state[12 + i] - pred[i]) * state[18 + i]
-        if moved_sq > par[6] * par[6] or fall > par[1] or state[1] >= par[12]:
-            _start_window(state, pred, offset, w_slow, pos)
+        if moved_sq > par[6] * par[6] or fall > par[1]:
+            _start_window(state, pred, offset, w_ext, pos)
     if state[0] == HOLD:
         for i in range(3):
             if mask[i] != 0.0:
