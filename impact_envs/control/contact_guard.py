@@ -81,7 +81,7 @@ class ContactGuardConfig:
     follow_delay_s: float = 0.1
     give_fraction: float = 0.5
     follow_fraction: float = 0.25
-    upward_cos: float = 0.7
+    upward_cos: float = 0.15
     release_move_m: float = 0.002
     force_max_n: float = 150.0
     torque_max_nm: float = 20.0
