@@ -10,7 +10,7 @@ increment / K and the estimate stays (the load does not change): that difference
 Force part, as vectors in the world frame, every tick (``contact_guard_step``):
 
 1. A window starts with the current prediction ``f0``, tracking offset ``p0`` (TCP minus its
-   target, so that a moving target is not read as the TCP giving) and raw estimate ``e0``.
+   target, so that a moving target is not read as the TCP giving) and slow estimate ``e0``.
 2. When the prediction has grown by ``growth_step_n`` (``g = f - f0``) in a direction that is not
    upward (``g_z < upward_cos * |g|``: lifting a load that still rests on something is how
    heavy objects are lifted, the lift ratchet) and not mostly a decrease of ``f0`` (``g . f0 <=
@@ -18,16 +18,17 @@ Force part, as vectors in the world frame, every tick (``contact_guard_step``):
    the guard waits ``follow_delay_s``, then calls the contact **blocked** if the offset moved
    less than ``give_fraction * |g| / K`` along ``g``, the TCP did not retreat against ``g`` by
    as much either (that is an external force that just changed, e.g. a push, not a contact
-   that does not give), **and** the raw estimate rose by at least ``follow_fraction * |g|``
+   that does not give), **and** the slow estimate rose by at least ``follow_fraction * |g|``
    along ``g`` (it follows the feedforward: the contact pushes back). Otherwise the growth is
    accepted and a new window starts.
 3. Blocked: the force feedforward is held at ``f0`` (the value before the growth) less any
-   push it had along ``g`` (learned before the contact, e.g. while the hand moved toward it:
-   no learned force may press into a contact that does not give), and the model is trained
-   toward it on the force axes (the training target is the hold, not the estimate),
-   so the prediction does not keep climbing behind the hold. The hold ends when the TCP has
-   moved ``release_move_m`` from where it started (the contact is gone) or the prediction has
-   fallen ``growth_step_n`` below the hold along ``g``.
+   push it had along ``u = g / |g|`` (learned before the contact, e.g. while the hand moved
+   toward it): no learned force may press into a contact that does not give. Only a rise of
+   the vertical force above the hold stays free (the lift ratchet again: a sideways hold must
+   not stop a lift). The training target is held the same way, so the prediction does not
+   climb behind the hold. The hold ends when the TCP has moved ``release_move_m`` from where
+   it started (the contact is gone) or the prediction has fallen ``growth_step_n`` below the
+   hold along ``u``.
 
 Then the applied feedforward is bounded: its rate (force ``force_rate_max_n_per_s``, torque
 ``torque_rate_max_nm_per_s``) and its size (``force_max_n``, ``torque_max_nm``), both as
@@ -112,7 +113,7 @@ def guard_views(buf):
     """(par (12), state (33), target (6)) of the guard buffer.
 
     par = ``guard_parameters``; state = [phase, ticks waited, holds started, f0 (3), p0 (3),
-    e0 (3), hold force (3), hold position (3), growth direction (3), previous feedforward (6),
+    e0 (3), hold force (3), hold position (3), blocked direction u (3), previous feedforward (6),
     this tick's tracking offset (3), TCP position at the window's start (3)]; p0 is a
     tracking offset (TCP - target);
     target = this tick's training target (the slow wrench, force axes replaced by the hold).
@@ -124,10 +125,10 @@ def guard_views(buf):
 
 
 @njit(cache=True)
-def _start_window(state, pred, offset, w_ext, pos) -> None:
+def _start_window(state, pred, offset, w_est, pos) -> None:
     state[0] = WINDOW
     for i in range(3):
-        state[3 + i], state[6 + i], state[9 + i] = pred[i], offset[i], w_ext[i]
+        state[3 + i], state[6 + i], state[9 + i] = pred[i], offset[i], w_est[i]
         state[30 + i] = pos[i]
 
 
@@ -159,13 +160,13 @@ def _exempt(par, state, gx, gy, gz, size) -> bool:
 
 
 @njit(cache=True)
-def _blocked(par, state, gx, gy, gz, size, offset, w_ext, pos) -> bool:
+def _blocked(par, state, gx, gy, gz, size, offset, w_est, pos) -> bool:
     """Whether the TCP did not give along g (relative to its target), did not retreat
     against it either (an external force that just changed), while the estimate followed."""
     give = par[3] * size * par[7]
     moved = _along(offset, state, 6, gx, gy, gz, size)
     retreat = -_along(pos, state, 30, gx, gy, gz, size)
-    follow = _along(w_ext, state, 9, gx, gy, gz, size)
+    follow = _along(w_est, state, 9, gx, gy, gz, size)
     return moved < give and retreat < give and follow >= par[4] * size
 
 
@@ -182,14 +183,21 @@ def _start_hold(state, ux, uy, uz, pos) -> None:
 
 
 @njit(cache=True)
-def contact_guard_step(pred, pos, pos_target, w_slow, w_ext, mask, buf) -> None:
+def _held(w, state, mask) -> None:
+    """w[:3] := the hold on learned axes, plus any rise of w_z above it (upward stays free)."""
+    for i in range(3):
+        if mask[i] != 0.0:
+            w[i] = state[12 + i] + (max(0.0, w[i] - state[12 + i]) if i == 2 else 0.0)
+
+
+@njit(cache=True)
+def contact_guard_step(pred, pos, pos_target, w_slow, mask, buf) -> None:
     """Advance the blocked test; write the training target (``guard_views``).
 
     ``pos`` / ``pos_target``: TCP position and its target [m]: the give is measured on the
     tracking offset ``pos - pos_target``, so a moving target is not read as a give. ``mask``:
-    the learning mask; masked force axes are neither tested nor held. ``w_slow``: the training
-    target it passes on; ``w_ext``: the raw estimate, whose rise the test reads (the slow
-    filter's slew limit lags a fast-growing prediction by more than the test waits).
+    the learning mask; masked force axes are neither tested nor held. ``w_slow``: the slow
+    estimate (whose rise the test reads, and the training target it passes on).
     """
     par, state, target = guard_views(buf)
     for i in range(6):
@@ -200,11 +208,11 @@ def contact_guard_step(pred, pos, pos_target, w_slow, w_ext, mask, buf) -> None:
     for i in range(3):
         offset[i] = pos[i] - pos_target[i]
     if state[0] == OPEN:
-        _start_window(state, pred, offset, w_ext, pos)
+        _start_window(state, pred, offset, w_slow, pos)
     gx, gy, gz, size = _growth(state, pred, mask)
     if state[0] == WINDOW and size >= par[1]:
         if _exempt(par, state, gx, gy, gz, size):
-            _start_window(state, pred, offset, w_ext, pos)
+            _start_window(state, pred, offset, w_slow, pos)
         else:
             state[0], state[1] = WAIT, 0.0
     elif state[0] == WAIT:
@@ -213,10 +221,10 @@ def contact_guard_step(pred, pos, pos_target, w_slow, w_ext, mask, buf) -> None:
             state[0] = WINDOW  # the growth went away again: keep the window
         elif state[1] >= par[2]:
             exempt = _exempt(par, state, gx, gy, gz, size)  # re-checked: g may have turned
-            if not exempt and _blocked(par, state, gx, gy, gz, size, offset, w_ext, pos):
+            if not exempt and _blocked(par, state, gx, gy, gz, size, offset, w_slow, pos):
                 _start_hold(state, gx / size, gy / size, gz / size, pos)
             else:
-                _start_window(state, pred, offset, w_ext, pos)
+                _start_window(state, pred, offset, w_slow, pos)
     elif state[0] == HOLD:
         moved_sq = fall = 0.0
         for i in range(3):
@@ -224,11 +232,9 @@ def contact_guard_step(pred, pos, pos_target, w_slow, w_ext, mask, buf) -> None:
             moved_sq += d * d
             fall += (state[12 + i] - pred[i]) * state[18 + i]
         if moved_sq > par[6] * par[6] or fall > par[1]:
-            _start_window(state, pred, offset, w_ext, pos)
+            _start_window(state, pred, offset, w_slow, pos)
     if state[0] == HOLD:
-        for i in range(3):
-            if mask[i] != 0.0:
-                target[i] = state[12 + i]
+        _held(target, state, mask)
 
 
 @njit(cache=True)
@@ -250,15 +256,13 @@ def _bound_rate_and_norm(w_ff, prev, lo, rate_max, norm_max) -> None:
 
 @njit(cache=True)
 def guard_feedforward(w_ff, mask, buf) -> None:
-    """Apply the hold (unmasked force axes) and the bounds to this tick's feedforward ``w_ff``
+    """Apply the hold (learned force axes) and the bounds to this tick's feedforward ``w_ff``
     (6,) in place."""
     par, state, _ = guard_views(buf)
     if par[0] == 0.0:
         return
     if state[0] == HOLD:
-        for i in range(3):
-            if mask[i] != 0.0:
-                w_ff[i] = state[12 + i]
+        _held(w_ff, state, mask)
     prev = state[21:27]
     _bound_rate_and_norm(w_ff, prev, 0, par[10], par[8])
     _bound_rate_and_norm(w_ff, prev, 3, par[11], par[9])

@@ -155,8 +155,8 @@ def controller_tick(
     if run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
         model_predict(model32, weights, biases, model)
-        w_slow = slow_filter_views(sf)[4]
-        contact_guard_step(pred, dyn.pos_ee_world, pos_target, w_slow, w_slow, mask, guard)
+        contact_guard_step(pred, dyn.pos_ee_world, pos_target, slow_filter_views(sf)[4], mask,
+                           guard)
         target = guard_views(guard)[2]  # w_slow; force axes held by the guard replaced
         flags = model_gate_step(target, slow_rate, mask, model)
         flags = learner_tick(flags, target, mask, model32, model, weights, biases, learner)
