@@ -77,3 +77,43 @@ def test_disabled_guard_changes_nothing() -> None:
 def test_guard_config_validation(kwargs: dict) -> None:
     with pytest.raises(InvalidArgumentError):
         ContactGuardConfig(**kwargs)
+
+
+def _holding_guard() -> ContactGuard:
+    """A guard that has just blocked a growth along -z (a press down into a table) from a
+    feedforward f0 = (3, 0, -4) N."""
+    from impact_envs.control.contact_guard import contact_guard_step
+
+    guard = ContactGuard(GUARD_ON, 0.001, 400.0)
+    ones, pos = np.ones(6), np.zeros(3)
+    f0 = np.array([3.0, 0.0, -4.0, 0.0, 0.0, 0.0])
+    contact_guard_step(f0, pos, pos, f0, ones, guard.buffer)  # window at f0
+    pressed = f0 + np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0])
+    for _ in range(150):  # grows 5 N down; the TCP stays; the estimate follows
+        contact_guard_step(pressed, pos, pos, pressed, ones, guard.buffer)
+    assert guard.holding
+    return guard
+
+
+def test_a_hold_drops_the_push_into_the_contact_and_keeps_the_vertical_rise_free() -> None:
+    guard = _holding_guard()
+    for _ in range(50):  # past the 1 N/tick rate bound
+        w = np.array([3.0, 0.0, -9.0, 0.0, 0.0, 0.0])
+        guard_feedforward(w, np.ones(6), guard.buffer)
+    np.testing.assert_allclose(w[:3], [3.0, 0.0, 0.0], atol=1e-12)  # -4 N push dropped too
+    np.testing.assert_allclose(guard.target[:3], [3.0, 0.0, 0.0], atol=1e-12)
+    guard2 = _holding_guard()
+    for _ in range(50):
+        up = np.array([3.0, 0.0, 25.0, 0.0, 0.0, 0.0])  # the model now asks to lift
+        guard_feedforward(up, np.ones(6), guard2.buffer)
+    np.testing.assert_allclose(up[:3], [3.0, 0.0, 25.0], atol=1e-12)
+
+
+def test_a_hold_ends_when_the_tcp_moves() -> None:
+    from impact_envs.control.contact_guard import contact_guard_step
+
+    guard = _holding_guard()
+    w = np.array([3.0, 0.0, -9.0, 0.0, 0.0, 0.0])
+    contact_guard_step(w, np.array([0.0, 0.0, 0.003]), np.zeros(3), w, np.ones(6),
+                       guard.buffer)
+    assert not guard.holding

@@ -49,7 +49,7 @@ from impact_envs.control.kernel_layout import _next
 from impact_envs.control.validation import check_positive
 from impact_envs.errors import InvalidArgumentError
 
-GUARD_SIZE = 12 + 33 + 6
+GUARD_SIZE = 13 + 33 + 6
 """Length of the guard's float64 buffer (``guard_views``)."""
 OPEN, WINDOW, WAIT, HOLD = 0.0, 1.0, 2.0, 3.0
 """Phases (state[0]): no window yet, window open, growth seen (waiting), holding."""
@@ -72,6 +72,7 @@ class ContactGuardConfig:
             nor growth with g . f0 <= -upward_cos |g| |f0| (a decrease of the force).
         release_move_m: A hold ends when the TCP moved this far from where it began [m].
         force_max_n: Bound on the norm of the force feedforward [N].
+        horizontal_force_max_n: Bound on the norm of its horizontal (x, y) part [N].
         torque_max_nm: Bound on the norm of the torque feedforward [Nm].
         force_rate_max_n_per_s: Bound on the rate of the force feedforward [N/s].
         torque_rate_max_nm_per_s: Bound on the rate of the torque feedforward [Nm/s].
@@ -85,13 +86,15 @@ class ContactGuardConfig:
     upward_cos: float = 0.15
     release_move_m: float = 0.002
     force_max_n: float = 150.0
+    horizontal_force_max_n: float = 60.0
     torque_max_nm: float = 20.0
     force_rate_max_n_per_s: float = 1000.0
     torque_rate_max_nm_per_s: float = 100.0
 
     def __post_init__(self) -> None:
         for name in ("growth_step_n", "follow_delay_s", "give_fraction", "release_move_m",
-                     "force_max_n", "torque_max_nm", "force_rate_max_n_per_s",
+                     "force_max_n", "horizontal_force_max_n", "torque_max_nm",
+                     "force_rate_max_n_per_s",
                      "torque_rate_max_nm_per_s"):
             check_positive(name, getattr(self, name))
         check_positive("follow_fraction", self.follow_fraction, allow_zero=True)
@@ -105,12 +108,13 @@ def guard_parameters(cfg: ContactGuardConfig, dt_s: float, stiffness_n_per_m: fl
     return (float(cfg.enabled), cfg.growth_step_n, round(cfg.follow_delay_s / dt_s),
             cfg.give_fraction, cfg.follow_fraction, cfg.upward_cos, cfg.release_move_m,
             1.0 / stiffness_n_per_m, cfg.force_max_n, cfg.torque_max_nm,
-            cfg.force_rate_max_n_per_s * dt_s, cfg.torque_rate_max_nm_per_s * dt_s)
+            cfg.force_rate_max_n_per_s * dt_s, cfg.torque_rate_max_nm_per_s * dt_s,
+            cfg.horizontal_force_max_n)
 
 
 @njit(cache=True)
 def guard_views(buf):
-    """(par (12), state (33), target (6)) of the guard buffer.
+    """(par (13), state (33), target (6)) of the guard buffer.
 
     par = ``guard_parameters``; state = [phase, ticks waited, holds started, f0 (3), p0 (3),
     e0 (3), hold force (3), hold position (3), blocked direction u (3), previous feedforward (6),
@@ -118,7 +122,7 @@ def guard_views(buf):
     tracking offset (TCP - target);
     target = this tick's training target (the slow wrench, force axes replaced by the hold).
     """
-    par, o = _next(buf, 0, 12)
+    par, o = _next(buf, 0, 13)
     state, o = _next(buf, o, 33)
     target, o = _next(buf, o, 6)
     return par, state, target
@@ -265,6 +269,11 @@ def guard_feedforward(w_ff, mask, buf) -> None:
         _held(w_ff, state, mask)
     prev = state[21:27]
     _bound_rate_and_norm(w_ff, prev, 0, par[10], par[8])
+    h_sq = w_ff[0] * w_ff[0] + w_ff[1] * w_ff[1]
+    if h_sq > par[12] * par[12]:
+        s = par[12] / math.sqrt(h_sq)
+        w_ff[0] *= s
+        w_ff[1] *= s
     _bound_rate_and_norm(w_ff, prev, 3, par[11], par[9])
     for i in range(6):
         prev[i] = w_ff[i]
