@@ -59,7 +59,10 @@ def test_bounds_limit_the_rate_and_size_of_the_feedforward() -> None:
     steps = np.linalg.norm(np.diff(applied[:, :3], axis=0), axis=1)
     assert steps.max() <= 1.0 + 1e-12  # 1000 N/s
     assert np.linalg.norm(applied[0, 3:]) <= 0.1 + 1e-12  # 100 Nm/s
-    np.testing.assert_allclose(np.linalg.norm(applied[-1, :3]), 150.0)
+    assert np.linalg.norm(applied[:, :3], axis=1).max() <= 150.0 + 1e-9
+    assert np.linalg.norm(applied[:, :2], axis=1).max() <= 60.0 + 1e-9  # horizontal
+    np.testing.assert_allclose(np.linalg.norm(applied[-1, :2]), 60.0)  # on both bounds
+    assert np.linalg.norm(applied[-1, :3]) > 140.0 and applied[-1, 2] < -130.0
     np.testing.assert_allclose(np.linalg.norm(applied[-1, 3:]), 20.0)
 
 

@@ -42,7 +42,7 @@ def test_overrides_parse_by_field_type_and_leave_the_rest() -> None:
     [
         ("internal_model.slow_rate_max", "SECTION.FIELD=VALUE"),
         ("slow_rate_max=1", "SECTION.FIELD=VALUE"),
-        ("brain.lr=1", "valid: ['estimator', 'impedance', 'internal_model'"),
+        ("brain.lr=1", "valid: ['estimator', 'guard', 'impedance', 'internal_model'"),
         ("internal_model.lr=1", "valid: ['history_length'"),
         ("internal_model.slow_rate_max=fast", "expected float"),
         ("impedance.compensate_gravity=maybe", "expected bool"),
