@@ -1,0 +1,40 @@
+"""Sustained-contact measures of one episode (issue 26): how long and how hard it pressed.
+
+The peak contact force of an episode is dominated by one instant (a hammer set down, a hand
+striking an object); the measures here read the whole contact-force trace instead, sampled
+every few ticks by the closed loop: the 95th percentile of the force and the time spent above
+10 N and above 20 N. A press that ratchets shows in all three; setting a heavy object down
+shows in the peak only. They become ``episodes.csv`` columns with the issue-26 rerun of every
+reference table (adding a column changes every table's bytes).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+SUSTAINED_THRESHOLDS_N: tuple[float, ...] = (10.0, 20.0)
+"""Force levels [N] whose time above is reported (``contact_over_10n_s``, ...)."""
+
+
+def sustained_contact(samples_n: np.ndarray, period_s: float) -> dict[str, float]:
+    """``contact_p95_n`` and ``contact_over_<X>n_s`` of a contact-force trace.
+
+    Args:
+        samples_n: Contact force [N] at equally spaced instants (any length; NaN-free).
+        period_s: Time between samples [s] (> 0).
+
+    Returns:
+        The 95th percentile [N] (NaN for an empty trace) and the time [s] above each of
+        ``SUSTAINED_THRESHOLDS_N`` (samples above the level times ``period_s``).
+    """
+    samples = np.asarray(samples_n, dtype=float).ravel()
+    if not period_s > 0.0:
+        raise ValueError(f"period_s={period_s!r}; valid: > 0")
+    if samples.size and not np.all(np.isfinite(samples)):
+        raise ValueError("contact-force samples must be finite")
+    out = {"contact_p95_n": float(np.percentile(samples, 95)) if samples.size else math.nan}
+    for level in SUSTAINED_THRESHOLDS_N:
+        out[f"contact_over_{level:g}n_s"] = float(np.count_nonzero(samples > level) * period_s)
+    return out

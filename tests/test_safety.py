@@ -1,0 +1,31 @@
+"""Sustained-contact measures (impact_eval/safety.py)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from impact_eval.safety import sustained_contact
+
+
+def test_a_growing_press_shows_in_every_measure_a_single_spike_in_none() -> None:
+    t = np.arange(0.0, 8.0, 0.004)
+    press = 9.0 + 12.0 * np.clip(t - 2.0, 0.0, None)  # ratchet: +12 N/s after 2 s
+    spike = np.full_like(t, 5.0)
+    spike[1000] = 600.0  # a hammer set down: one 4 ms sample
+    p, s = sustained_contact(press, 0.004), sustained_contact(spike, 0.004)
+    assert p["contact_p95_n"] > 70.0 and s["contact_p95_n"] == pytest.approx(5.0)
+    assert p["contact_over_10n_s"] == pytest.approx(8.0 - 2.0 - 1.0 / 12.0, abs=0.01)
+    assert p["contact_over_20n_s"] == pytest.approx(8.0 - 2.0 - 11.0 / 12.0, abs=0.01)
+    assert s["contact_over_10n_s"] == pytest.approx(0.004) and s["contact_over_20n_s"] == 0.004
+
+
+def test_empty_and_bad_traces() -> None:
+    empty = sustained_contact(np.zeros(0), 0.004)
+    assert math.isnan(empty["contact_p95_n"]) and empty["contact_over_20n_s"] == 0.0
+    with pytest.raises(ValueError, match="period_s"):
+        sustained_contact(np.ones(3), 0.0)
+    with pytest.raises(ValueError, match="finite"):
+        sustained_contact(np.array([1.0, np.nan]), 0.004)
