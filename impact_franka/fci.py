@@ -1,0 +1,68 @@
+"""FCI conventions (libfranka 0.21 / pylibfranka), as named structures and pure functions.
+
+- The robot adds its own gravity compensation to a torque command: send ``tau - g(q)``.
+- ``tau_J`` is the link-side measured joint torque, gravity included: the controller's
+  ``tau_measured``.
+- ``O_T_EE`` is a column-major 4x4: the flange composed with ``F_T_EE`` (the end effector set
+  in Desk, or by the simulator) and ``EE_T_K``; it is compared with our TCP, never used for
+  control (the controller computes its own kinematics from ``q``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import NamedTuple
+
+import numpy as np
+
+from impact_envs.control.config import ControllerConfig, libfranka_limits
+from impact_envs.errors import ImpactError
+
+
+class FrankaError(ImpactError):
+    """The robot or its client library refused, stopped or could not be reached."""
+
+
+class FciReading(NamedTuple):
+    """One robot state as the controller reads it: ``q`` [rad], ``dq`` [rad/s],
+    ``tau_measured`` (= ``tau_J``) [Nm], and ``O_T_EE`` as ``pos_ee`` [m] / ``rot_ee``."""
+
+    q: np.ndarray
+    dq: np.ndarray
+    tau_measured: np.ndarray
+    pos_ee: np.ndarray
+    rot_ee: np.ndarray
+
+
+def pose_from_column_major(matrix16: object) -> tuple[np.ndarray, np.ndarray]:
+    """(position [m], rotation matrix) of a column-major 4x4 (libfranka's layout)."""
+    m = np.asarray(matrix16, dtype=float).reshape(4, 4).T
+    return m[:3, 3].copy(), m[:3, :3].copy()
+
+
+def reading(state: object) -> FciReading:
+    """An ``FciReading`` of a pylibfranka ``RobotState`` (any object with those fields)."""
+    pos, rot = pose_from_column_major(state.O_T_EE)  # type: ignore[attr-defined]
+    return FciReading(np.array(state.q, dtype=float), np.array(state.dq, dtype=float),  # type: ignore[attr-defined]
+                      np.array(state.tau_J, dtype=float), pos, rot)  # type: ignore[attr-defined]
+
+
+def torque_command(tau_total: np.ndarray, tau_gravity: np.ndarray) -> np.ndarray:
+    """The torque to send: ``tau_total - tau_gravity`` (the robot adds gravity itself).
+
+    Raises:
+        FrankaError: A non-finite command (libfranka would throw on it).
+    """
+    cmd = np.asarray(tau_total, dtype=float) - np.asarray(tau_gravity, dtype=float)
+    if cmd.shape != (7,) or not np.all(np.isfinite(cmd)):
+        raise FrankaError(f"refusing to send a torque command {cmd!r}; valid: 7 finite values")
+    return cmd
+
+
+def fr3_config(base: ControllerConfig | None = None) -> ControllerConfig:
+    """``base`` (default ``ControllerConfig()``) as it must run on an FR3: libfranka's exact
+    limits, the in-kernel learner (a bounded tick) and the contact guard."""
+    cfg = base or ControllerConfig()
+    return replace(cfg, limits=libfranka_limits(),
+                   internal_model=replace(cfg.internal_model, learner="numba"),
+                   guard=replace(cfg.guard, enabled=True))
