@@ -3,8 +3,9 @@
     impact-robot check --host HOST [--seconds S]
         connect, print the robot mode and errors, our TCP against the robot's O_T_EE, and the
         loop timing over S seconds of zero torques (the robot's gravity compensation alone)
-    impact-robot hold --host HOST [--controller impact|impedance] [--seconds S]
-        hold the current TCP pose with the FR3 configuration (fci.fr3_config)
+    impact-robot hold --host HOST [--controller impact|impedance] [--seconds S] [--out DIR]
+        hold the current TCP pose with the FR3 configuration (fci.fr3_config); DIR gets
+        ticks.csv (one row per control tick) and run.json
 
 Exit 0 after a clean finish; 1 with one line naming the robot's errors otherwise; 2 on bad
 arguments. A real robot needs a real-time kernel (``--realtime enforce``).
@@ -13,7 +14,9 @@ arguments. A real robot needs a real-time kernel (``--realtime enforce``).
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+from pathlib import Path
 
 from impact_envs.errors import ImpactError
 
@@ -32,6 +35,8 @@ def _parser() -> argparse.ArgumentParser:
                        help="libfranka RealtimeConfig (enforce: needs a real-time kernel)")
         if name == "hold":
             p.add_argument("--controller", choices=CONTROLLERS, default="impact")
+            p.add_argument("--out", type=Path, default=None,
+                           help="write DIR/ticks.csv (one row per tick) and DIR/run.json")
     return parser
 
 
@@ -70,7 +75,26 @@ def run(args: argparse.Namespace) -> int:
     controller = ImpactController(PinocchioArm(), fr3_config(), mode=mode)
     report = hold(robot, controller, args.seconds, float_only=args.command == "check")
     _print_report(report)
+    if report.stopped_by_signal:
+        print("  stopped early on SIGINT/SIGTERM (cleanly: the last command finished the motion)")
+    if getattr(args, "out", None) is not None:
+        _write_outputs(args, report)
     return 0 if not report.robot_errors else 1
+
+
+def _write_outputs(args: argparse.Namespace, report: object) -> None:
+    """``DIR/ticks.csv`` and ``DIR/run.json`` (versions, arguments, what the loop measured)."""
+    from impact_eval.runinfo import host_info, package_versions, utc_now
+
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    report.ticks_table.to_csv(out / "ticks.csv", index=False, float_format="%.9g")
+    summary = {k: v for k, v in vars(report).items() if k != "ticks_table"}
+    run = {"command": "impact-robot " + " ".join(sys.argv[1:]), "utc": utc_now(),
+           "arguments": {k: str(v) for k, v in vars(args).items()},
+           "versions": package_versions(), "host": host_info(), "report": summary}
+    (out / "run.json").write_text(json.dumps(run, indent=2) + "\n")
+    print(f"  wrote {out / 'ticks.csv'} and {out / 'run.json'}")
 
 
 def main(argv: list[str] | None = None) -> int:

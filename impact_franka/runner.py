@@ -4,17 +4,21 @@
 given time, or streams zero torques (``float_only``: the robot's own gravity compensation
 alone). Before the loop, every kernel is compiled and warmed on the current reading, so the
 first 1 ms cycle does not wait on numba. Each tick: ``readOnce`` -> ``compute`` -> ``tau - g``
--> ``writeOnce``; the last command carries ``motion_finished``. A robot error ends the loop
-and is reported with the robot's own error flags.
+-> ``writeOnce``; the last command carries ``motion_finished``, also when SIGINT or SIGTERM
+arrives (the loop finishes its cycle and stops cleanly). A robot error ends the loop and is
+reported with the robot's own error flags. Every tick is logged (``TICK_COLUMNS``).
 """
 
 from __future__ import annotations
 
 import math
+import signal
+import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
 
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.lie import matrix_to_quat
@@ -22,6 +26,31 @@ from impact_franka.fci import FrankaError, reading, torque_command
 
 WARM_TICKS = 200
 """``compute`` calls before the loop (numba compilation and the learner's first step)."""
+TICK_COLUMNS = ("t_s", "pos_error_m", "wrench_ext_z_n", "wrench_slow_z_n", "wrench_pred_z_n",
+                "gate_open", "guard_holding", "tick_compute_s")
+"""Columns of ``LoopReport.ticks_table`` (``ticks.csv``), one row per control tick."""
+
+
+class _StopRequest:
+    """SIGINT / SIGTERM during the loop ask it to finish (last command ``motion_finished``)
+    instead of raising inside a 1 ms cycle; the previous handlers come back afterwards."""
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous: dict[int, object] = {}
+
+    def __enter__(self) -> _StopRequest:
+        if threading.current_thread() is threading.main_thread():  # else: signals stay as set
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._previous[sig] = signal.signal(sig, self._request)
+        return self
+
+    def _request(self, signum: int, frame: object) -> None:
+        self.requested = True
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
 
 
 @dataclass(frozen=True)
@@ -36,6 +65,8 @@ class LoopReport:
         tcp_vs_robot_m: Our TCP (Pinocchio, from ``q``) minus the robot's ``O_T_EE`` at the
             start [m] (frames reconciled: ~0 when Desk's end effector is the Franka Hand).
         robot_errors: The robot's error flags after the loop ("" if none).
+        stopped_by_signal: The loop ended early on SIGINT / SIGTERM (cleanly).
+        ticks_table: One row per tick, ``TICK_COLUMNS``.
     """
 
     ticks: int
@@ -47,6 +78,8 @@ class LoopReport:
     pos_error_max_m: float
     tcp_vs_robot_m: float
     robot_errors: str
+    stopped_by_signal: bool = False
+    ticks_table: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=TICK_COLUMNS))
 
     @property
     def rate_hz(self) -> float:
@@ -78,34 +111,43 @@ def hold(robot: object, controller: ImpactController, seconds: float,
     arm.update(first.q, np.zeros(7))
     pos, quat = arm.pos_ee_world.copy(), matrix_to_quat(arm.rot_ee_world)
     _warm(controller, first.q, first.tau_measured, pos, quat)
-    costs, errors = [], []
+    rows: list[tuple] = []
     active = robot.start_torque_control()  # type: ignore[attr-defined]
     start = time.perf_counter()
+    sig = controller.signals
     try:
-        while True:
-            state, _ = active.readOnce()
-            r = reading(state)
-            t0 = time.perf_counter_ns()
-            tau = controller.compute(r.q, r.dq, r.tau_measured, pos, quat)
-            cmd = np.zeros(7) if float_only else torque_command(tau, arm.gravity)
-            costs.append((time.perf_counter_ns() - t0) * 1e-3)
-            errors.append(controller.signals.pos_error_norm_m)
-            torques = plf.Torques(cmd.tolist())
-            done = time.perf_counter() - start >= seconds
-            torques.motion_finished = done
-            active.writeOnce(torques)
-            if done:
-                break
+        with _StopRequest() as stop:
+            while True:
+                state, _ = active.readOnce()
+                r = reading(state)
+                t0 = time.perf_counter_ns()
+                tau = controller.compute(r.q, r.dq, r.tau_measured, pos, quat)
+                cmd = np.zeros(7) if float_only else torque_command(tau, arm.gravity)
+                cost = (time.perf_counter_ns() - t0) * 1e-9
+                now = time.perf_counter() - start
+                rows.append((now, sig.pos_error_norm_m, sig.wrench_ext_world[2],
+                             sig.wrench_slow_world[2], sig.wrench_pred_world[2],
+                             int(sig.gate_open), int(controller.guard.holding), cost))
+                torques = plf.Torques(cmd.tolist())
+                done = now >= seconds or stop.requested
+                torques.motion_finished = done
+                active.writeOnce(torques)
+                if done:
+                    break
     except (plf.ControlException, plf.NetworkException, plf.CommandException) as exc:
         flags = str(robot.read_once().current_errors)  # type: ignore[attr-defined]
         msg = " ".join(str(exc).split())
         raise FrankaError(f"the robot stopped the motion: {msg}; errors: {flags}") from None
     elapsed = time.perf_counter() - start
-    cost = np.asarray(costs)
+    table = pd.DataFrame(rows, columns=TICK_COLUMNS)
+    cost_us = table["tick_compute_s"].to_numpy() * 1e6
+    errors = table["pos_error_m"].to_numpy()
     flags = robot.read_once().current_errors  # type: ignore[attr-defined]
     return LoopReport(
-        ticks=len(costs), seconds=elapsed, compute_p50_us=float(np.percentile(cost, 50)),
-        compute_p999_us=float(np.percentile(cost, 99.9)), compute_max_us=float(cost.max()),
-        pos_error_final_m=float(errors[-1]), pos_error_max_m=float(max(errors)),
+        ticks=len(table), seconds=elapsed, compute_p50_us=float(np.percentile(cost_us, 50)),
+        compute_p999_us=float(np.percentile(cost_us, 99.9)),
+        compute_max_us=float(cost_us.max()), pos_error_final_m=float(errors[-1]),
+        pos_error_max_m=float(errors.max()),
         tcp_vs_robot_m=float(np.linalg.norm(pos - first.pos_ee)),
-        robot_errors="" if not bool(flags) else str(flags))
+        robot_errors="" if not bool(flags) else str(flags),
+        stopped_by_signal=stop.requested, ticks_table=table)

@@ -123,3 +123,49 @@ def test_unreachable_robot_is_one_line(capsys) -> None:
     assert main(["check", "--host", "127.0.0.1", "--seconds", "1"]) == 1
     err = capsys.readouterr().err
     assert err.startswith("impact-robot: cannot connect to 127.0.0.1") and err.count("\n") == 1
+
+
+def test_hold_writes_one_row_per_tick_and_run_json(franky_sim, tmp_path) -> None:
+    import json
+
+    import pandas as pd
+
+    from impact_franka.cli import main
+    from impact_franka.runner import TICK_COLUMNS
+
+    assert main(["hold", "--host", franky_sim, "--seconds", "1", "--out", str(tmp_path)]) == 0
+    ticks = pd.read_csv(tmp_path / "ticks.csv")
+    run = json.loads((tmp_path / "run.json").read_text())
+    assert tuple(ticks.columns) == TICK_COLUMNS
+    assert len(ticks) == run["report"]["ticks"] > 300
+    assert ticks["t_s"].is_monotonic_increasing and ticks["pos_error_m"].max() < 2e-3
+    assert run["report"]["robot_errors"] == "" and run["versions"]
+
+
+def test_sigterm_finishes_the_motion_cleanly(franky_sim) -> None:
+    import threading
+
+    import pylibfranka as plf
+
+    from impact_envs.control.controller import ImpactController
+    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_franka.runner import hold
+
+    robot = plf.Robot(franky_sim, plf.RealtimeConfig.kIgnore)
+    controller = ImpactController(PinocchioArm(), fr3_config(), mode="impact")
+    controller.reset(np.zeros(7))
+    for _ in range(5):  # compile before the timer runs: the signal must land in the loop
+        controller.compute(np.zeros(7), np.zeros(7), np.zeros(7), np.array([0.5, 0, 0.4]),
+                           np.array([0.0, 1.0, 0.0, 0.0]))
+    early = []
+    previous = signal.signal(signal.SIGTERM, lambda *a: early.append(1))  # a safety net
+    try:
+        timer = threading.Timer(1.5, os.kill, (os.getpid(), signal.SIGTERM))
+        timer.start()
+        report = hold(robot, controller, 30.0)
+        timer.join()
+        assert signal.getsignal(signal.SIGTERM) is not previous  # ours is back, not the loop's
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert not early and report.stopped_by_signal and report.seconds < 10.0  # 30 s hold ended
+    assert report.robot_errors == ""
