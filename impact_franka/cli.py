@@ -76,9 +76,13 @@ def run(args: argparse.Namespace) -> int:
     report = hold(robot, controller, args.seconds, float_only=args.command == "check")
     _print_report(report)
     if report.stopped_by_signal:
-        print("  stopped early on SIGINT/SIGTERM (cleanly: the last command finished the motion)")
+        print("  stopped early on SIGINT/SIGTERM (ramped out, then finished the motion)")
     if getattr(args, "out", None) is not None:
         _write_outputs(args, report)
+    if report.stop_reason == "budget":
+        print("impact-robot: stopped: controller compute over the per-tick budget on consecutive "
+              "ticks (ramped out)", file=sys.stderr)
+        return 1
     return 0 if not report.robot_errors else 1
 
 

@@ -22,6 +22,10 @@ import pandas as pd
 
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.lie import matrix_to_quat
+from impact_envs.control.limits import (
+    LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S,
+    limit_rate_libfranka_kernel,
+)
 from impact_franka.fci import FrankaError, reading, torque_command
 
 WARM_TICKS = 200
@@ -29,6 +33,10 @@ WARM_TICKS = 200
 TICK_COLUMNS = ("t_s", "pos_error_m", "wrench_ext_z_n", "wrench_slow_z_n", "wrench_pred_z_n",
                 "gate_open", "guard_holding", "tick_compute_s")
 """Columns of ``LoopReport.ticks_table`` (``ticks.csv``), one row per control tick."""
+RAMP_S = 0.3
+"""Torque ramp-in at the start and ramp-out at every end (time, signal, budget) [s]."""
+BUDGET_S, BUDGET_STRIKES = 0.8e-3, 3
+"""Per-tick compute budget [s] and the consecutive ticks over it that stop the loop."""
 
 
 class _StopRequest:
@@ -65,7 +73,8 @@ class LoopReport:
         tcp_vs_robot_m: Our TCP (Pinocchio, from ``q``) minus the robot's ``O_T_EE`` at the
             start [m] (frames reconciled: ~0 when Desk's end effector is the Franka Hand).
         robot_errors: The robot's error flags after the loop ("" if none).
-        stopped_by_signal: The loop ended early on SIGINT / SIGTERM (cleanly).
+        stop_reason: "" (ran its time), "signal" (SIGINT / SIGTERM) or "budget" (compute over
+            the per-tick budget on ``BUDGET_STRIKES`` ticks in a row); every stop ramps out.
         ticks_table: One row per tick, ``TICK_COLUMNS``.
     """
 
@@ -78,8 +87,13 @@ class LoopReport:
     pos_error_max_m: float
     tcp_vs_robot_m: float
     robot_errors: str
-    stopped_by_signal: bool = False
+    stop_reason: str = ""
     ticks_table: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=TICK_COLUMNS))
+
+    @property
+    def stopped_by_signal(self) -> bool:
+        """Whether SIGINT / SIGTERM ended the loop early."""
+        return self.stop_reason == "signal"
 
     @property
     def rate_hz(self) -> float:
@@ -96,10 +110,22 @@ def _warm(controller: ImpactController, q: np.ndarray, tau: np.ndarray, pos: np.
     controller.reset(q)
 
 
+def _ramp(now: float, end: float | None, ramp_s: float) -> float:
+    """Torque scale in [0, 1]: up over ``ramp_s`` from the start, down over ``ramp_s`` from
+    ``end`` (None: not ending)."""
+    up = min(1.0, now / ramp_s)
+    return up if end is None else min(up, max(0.0, 1.0 - (now - end) / ramp_s))
+
+
 def hold(robot: object, controller: ImpactController, seconds: float,
-         float_only: bool = False) -> LoopReport:
+         float_only: bool = False, budget_s: float = BUDGET_S,
+         ramp_s: float = RAMP_S) -> LoopReport:
     """Hold the current TCP pose for ``seconds`` (or float: zero torques) on ``robot``
     (a ``pylibfranka.Robot``); returns what the loop measured.
+
+    The command is ramped in over ``ramp_s`` and out over ``ramp_s`` at every end, then
+    rate-limited against the previous command exactly as libfranka's ``limitRate`` (the
+    ramp must not add a step the robot refuses).
 
     Raises:
         FrankaError: The robot stopped the motion (its error flags in the message).
@@ -112,6 +138,7 @@ def hold(robot: object, controller: ImpactController, seconds: float,
     pos, quat = arm.pos_ee_world.copy(), matrix_to_quat(arm.rot_ee_world)
     _warm(controller, first.q, first.tau_measured, pos, quat)
     rows: list[tuple] = []
+    sent, reason, end, strikes = np.zeros(7), "", None, 0
     active = robot.start_torque_control()  # type: ignore[attr-defined]
     start = time.perf_counter()
     sig = controller.signals
@@ -125,11 +152,20 @@ def hold(robot: object, controller: ImpactController, seconds: float,
                 cmd = np.zeros(7) if float_only else torque_command(tau, arm.gravity)
                 cost = (time.perf_counter_ns() - t0) * 1e-9
                 now = time.perf_counter() - start
+                strikes = strikes + 1 if cost > budget_s else 0
+                if end is None and (now >= seconds or stop.requested or
+                                    strikes >= BUDGET_STRIKES):
+                    end = now
+                    reason = ("signal" if stop.requested else
+                              "budget" if strikes >= BUDGET_STRIKES else "")
+                scale = _ramp(now, end, ramp_s)
+                limit_rate_libfranka_kernel(cmd * scale, sent.copy(),
+                                            LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S, sent)
                 rows.append((now, sig.pos_error_norm_m, sig.wrench_ext_world[2],
                              sig.wrench_slow_world[2], sig.wrench_pred_world[2],
                              int(sig.gate_open), int(controller.guard.holding), cost))
-                torques = plf.Torques(cmd.tolist())
-                done = now >= seconds or stop.requested
+                done = end is not None and scale == 0.0 and not np.any(sent)
+                torques = plf.Torques(sent.tolist())
                 torques.motion_finished = done
                 active.writeOnce(torques)
                 if done:
@@ -150,4 +186,4 @@ def hold(robot: object, controller: ImpactController, seconds: float,
         pos_error_max_m=float(errors.max()),
         tcp_vs_robot_m=float(np.linalg.norm(pos - first.pos_ee)),
         robot_errors="" if not bool(flags) else str(flags),
-        stopped_by_signal=stop.requested, ticks_table=table)
+        stop_reason=reason, ticks_table=table)

@@ -169,3 +169,19 @@ def test_sigterm_finishes_the_motion_cleanly(franky_sim) -> None:
         signal.signal(signal.SIGTERM, previous)
     assert not early and report.stopped_by_signal and report.seconds < 10.0  # 30 s hold ended
     assert report.robot_errors == ""
+
+
+def test_budget_overrun_stops_with_a_ramp_out(franky_sim) -> None:
+    """A budget no tick can meet (1 us): the loop stops after 3 ticks over it, ramps the
+    torque out within the robot's rate limit and finishes the motion without a robot error."""
+    import pylibfranka as plf
+
+    from impact_envs.control.controller import ImpactController
+    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_franka.runner import hold
+
+    robot = plf.Robot(franky_sim, plf.RealtimeConfig.kIgnore)
+    controller = ImpactController(PinocchioArm(), fr3_config(), mode="impact")
+    report = hold(robot, controller, 30.0, budget_s=1e-6, ramp_s=0.1)
+    assert report.stop_reason == "budget" and report.seconds < 5.0
+    assert report.robot_errors == ""
