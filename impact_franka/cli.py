@@ -52,15 +52,25 @@ def _print_report(report: object) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Connect and run ``args.command``; returns the exit status."""
-    import pylibfranka as plf
+    if not args.seconds > 0:
+        raise ImpactError(f"invalid --seconds {args.seconds!r}; valid: > 0")
+    out = getattr(args, "out", None)
+    if out is not None:  # before the robot moves: a run must not end unable to save its log
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ImpactError(f"invalid --out {out}: {exc.strerror}; valid: a writable "
+                              "directory") from None
+    try:
+        import pylibfranka as plf
+    except ImportError:
+        raise ImpactError("impact-robot needs pylibfranka: pip install -e '.[franka]'") from None
 
     from impact_envs.control.controller import ImpactController
     from impact_envs.robot.dynamics import PinocchioArm
     from impact_franka.fci import fr3_config
     from impact_franka.runner import hold
 
-    if not args.seconds > 0:
-        raise ImpactError(f"invalid --seconds {args.seconds!r}; valid: > 0")
     config = (plf.RealtimeConfig.kEnforce if args.realtime == "enforce"
               else plf.RealtimeConfig.kIgnore)
     try:
@@ -91,7 +101,6 @@ def _write_outputs(args: argparse.Namespace, report: object) -> None:
     from impact_eval.runinfo import host_info, package_versions, utc_now
 
     out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
     report.ticks_table.to_csv(out / "ticks.csv", index=False, float_format="%.9g")
     summary = {k: v for k, v in vars(report).items() if k != "ticks_table"}
     run = {"command": "impact-robot " + " ".join(sys.argv[1:]), "utc": utc_now(),

@@ -174,8 +174,13 @@ def hold(robot: object, controller: ImpactController, seconds: float,
         flags = str(robot.read_once().current_errors)  # type: ignore[attr-defined]
         msg = " ".join(str(exc).split())
         raise FrankaError(f"the robot stopped the motion: {msg}; errors: {flags}") from None
-    elapsed = time.perf_counter() - start
-    table = pd.DataFrame(rows, columns=TICK_COLUMNS)
+    return _report(pd.DataFrame(rows, columns=TICK_COLUMNS), time.perf_counter() - start,
+                   float(np.linalg.norm(pos - first.pos_ee)), robot, reason)
+
+
+def _report(table: pd.DataFrame, elapsed: float, tcp_vs_robot_m: float, robot: object,
+            reason: str) -> LoopReport:
+    """The ``LoopReport`` of a finished loop's tick log (reads the robot's error flags)."""
     cost_us = table["tick_compute_s"].to_numpy() * 1e6
     errors = table["pos_error_m"].to_numpy()
     flags = robot.read_once().current_errors  # type: ignore[attr-defined]
@@ -183,7 +188,6 @@ def hold(robot: object, controller: ImpactController, seconds: float,
         ticks=len(table), seconds=elapsed, compute_p50_us=float(np.percentile(cost_us, 50)),
         compute_p999_us=float(np.percentile(cost_us, 99.9)),
         compute_max_us=float(cost_us.max()), pos_error_final_m=float(errors[-1]),
-        pos_error_max_m=float(errors.max()),
-        tcp_vs_robot_m=float(np.linalg.norm(pos - first.pos_ee)),
-        robot_errors="" if not bool(flags) else str(flags),
-        stop_reason=reason, ticks_table=table)
+        pos_error_max_m=float(errors.max()), tcp_vs_robot_m=tcp_vs_robot_m,
+        robot_errors="" if not bool(flags) else str(flags), stop_reason=reason,
+        ticks_table=table)

@@ -30,6 +30,7 @@ from impact_envs.control.controller import INPUT_ABS_MAX, ImpactController
 from impact_envs.control.kernels import limiter_views
 from impact_envs.control.lie import matrix_to_quat
 from impact_envs.errors import InvalidArgumentError
+from impact_franka.fci import fr3_config
 
 dynamics = pytest.importorskip("impact_envs.robot.dynamics")
 
@@ -47,6 +48,9 @@ NOMINAL = {"q": Q0, "dq": np.zeros(7), "tau_measured": _ARM.gravity.copy(),
            "quat_target_world": matrix_to_quat(_ARM.rot_ee_world), "wrench_cmd_world": np.zeros(6)}
 CONTROLLERS = {mode: ImpactController(dynamics.PinocchioArm(), ControllerConfig(), mode=mode)
                for mode in ("impact", "impedance")}
+# The configuration an FR3 runs (impact_franka.fci.fr3_config): libfranka's limiter, the
+# in-kernel learner and the contact guard, under the same contract.
+CONTROLLERS["fr3"] = ImpactController(dynamics.PinocchioArm(), fr3_config(), mode="impact")
 
 _element = st.one_of(
     st.floats(-1.0, 1.0),                                         # near nominal (scaled below)
@@ -117,9 +121,11 @@ def _refused(kwargs: dict) -> bool:
 def _state(ctrl: ImpactController) -> list[np.ndarray]:
     """Every array that carries the controller's state from tick to tick, copied."""
     im = ctrl.internal_model
+    learner = [part for value in im.learner for part in
+               (value if isinstance(value, tuple) else (value,))]
     arrays = [ctrl.buffer, ctrl.estimator.buffer, ctrl.slow_filter.buffer,
               ctrl.impedance.buffer, ctrl.limiter.buffer, im.buffer, im.kernel_args()[0],
-              *im.kernel_args()[1], *im.kernel_args()[2]]
+              *im.kernel_args()[1], *im.kernel_args()[2], ctrl.guard.buffer, *learner]
     return [a.copy() for a in arrays] + [np.array([im.replay.count, im.n_updates])]
 
 
@@ -136,7 +142,7 @@ def _check_limits(ctrl: ImpactController, out: np.ndarray, before: np.ndarray) -
 
 @settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-@given(mode=st.sampled_from(["impact", "impedance"]),
+@given(mode=st.sampled_from(["impact", "impedance", "fr3"]),
        ticks=st.lists(_tick(), min_size=1, max_size=6))
 def test_compute_refuses_or_returns_limited_finite_torques(mode, ticks) -> None:
     ctrl = CONTROLLERS[mode]

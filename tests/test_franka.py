@@ -158,13 +158,17 @@ def test_sigterm_finishes_the_motion_cleanly(franky_sim) -> None:
         controller.compute(np.zeros(7), np.zeros(7), np.zeros(7), np.array([0.5, 0, 0.4]),
                            np.array([0.0, 1.0, 0.0, 0.0]))
     early = []
-    previous = signal.signal(signal.SIGTERM, lambda *a: early.append(1))  # a safety net
+
+    def net(*_: object) -> None:  # a safety net: a signal before the loop must not kill pytest
+        early.append(1)
+
+    previous = signal.signal(signal.SIGTERM, net)
     try:
         timer = threading.Timer(1.5, os.kill, (os.getpid(), signal.SIGTERM))
         timer.start()
         report = hold(robot, controller, 30.0)
         timer.join()
-        assert signal.getsignal(signal.SIGTERM) is not previous  # ours is back, not the loop's
+        assert signal.getsignal(signal.SIGTERM) is net  # the handler before the loop is back
     finally:
         signal.signal(signal.SIGTERM, previous)
     assert not early and report.stopped_by_signal and report.seconds < 10.0  # 30 s hold ended
@@ -185,3 +189,14 @@ def test_budget_overrun_stops_with_a_ramp_out(franky_sim) -> None:
     report = hold(robot, controller, 30.0, budget_s=1e-6, ramp_s=0.1)
     assert report.stop_reason == "budget" and report.seconds < 5.0
     assert report.robot_errors == ""
+
+
+def test_unwritable_out_is_refused_before_connecting(tmp_path, capsys) -> None:
+    from impact_franka.cli import main
+
+    blocker = tmp_path / "file"
+    blocker.write_text("keep me")
+    assert main(["hold", "--host", "127.0.0.1", "--out", str(blocker / "run")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("impact-robot: invalid --out") and err.count("\n") == 1
+    assert blocker.read_text() == "keep me"

@@ -94,6 +94,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args(argv)
+    if not (args.hold_s >= 3.0 and all(d > 0 for d in args.depths)):
+        parser.error(f"--hold-s {args.hold_s}, --depths {args.depths}: valid: hold >= 3 s "
+                     "(growth is read from 2-3 s), depths > 0 mm")
     rows = []
     for angle in args.angles:
         for depth in args.depths:

@@ -99,6 +99,8 @@ def main(argv: list[str] | None = None) -> int:
                         choices=["numpy", "numba"])
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args(argv)
+    if not (args.seconds > 0 and args.switch_s > 0):
+        parser.error(f"--seconds {args.seconds} / --switch-s {args.switch_s}: valid: > 0")
     report: dict[str, object] = {"command": "python -m impact_eval.experiments.tick_latency "
                                  + " ".join(argv or []), "machine": platform.processor()
                                  or platform.machine(), "seconds": args.seconds}
