@@ -16,7 +16,7 @@ from pathlib import Path
 
 from impact_envs.errors import InvalidArgumentError
 from impact_eval.grid import format_value
-from impact_eval.metrics import EPISODE_COLUMNS
+from impact_eval.metrics import EPISODE_COLUMNS, SUSTAINED_COLUMNS
 
 EpisodeKey = tuple[str, str, int]
 """``(method, canonical param value text, episode index)``: identifies a row."""
@@ -71,7 +71,12 @@ def read_rows(path: Path) -> list[dict[str, str]]:
     text = path.read_text()
     with io.StringIO(text[: text.rfind("\n") + 1], newline="") as f:
         reader = csv.DictReader(f)
-        if tuple(reader.fieldnames or ()) != EPISODE_COLUMNS:
+        columns = tuple(reader.fieldnames or ())
+        if columns == tuple(c for c in EPISODE_COLUMNS if c not in SUSTAINED_COLUMNS):
+            raise InvalidArgumentError(
+                f"{path} was written by an older impact-eval (no {', '.join(SUSTAINED_COLUMNS)}"
+                " columns) and cannot be resumed; run into a new --out directory")
+        if columns != EPISODE_COLUMNS:
             raise InvalidArgumentError(
                 f"{path} is not an impact-eval episodes.csv (columns {reader.fieldnames})"
             )

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from impact_eval.safety import sustained_contact
+
 EPISODE_COLUMNS: tuple[str, ...] = (
     "method",
     "env_id",
@@ -22,10 +24,16 @@ EPISODE_COLUMNS: tuple[str, ...] = (
     "energy_j",
     "peak_torque_nm",
     "peak_contact_force_n",
+    "contact_p95_n",
+    "contact_over_10n_s",
+    "contact_over_20n_s",
     "mean_pose_error_m",
     "failure_reason",
 )
 """Columns of ``episodes.csv``, in file order. No wall-clock values (the file is deterministic)."""
+
+SUSTAINED_COLUMNS: tuple[str, ...] = ("contact_p95_n", "contact_over_10n_s", "contact_over_20n_s")
+"""The sustained-contact columns (``safety.sustained_contact``), added on 2026-11-26."""
 
 Z_95 = 1.959963984540054
 """Two-sided 95 % standard-normal quantile."""
@@ -90,6 +98,8 @@ class EpisodeTracker:
     _peak_torque: list[float] = field(default_factory=list)
     _peak_force: list[float] = field(default_factory=list)
     _pose_error: list[float] = field(default_factory=list)
+    _contact: list[np.ndarray] = field(default_factory=list)
+    _contact_dt: float = math.nan
 
     @property
     def done(self) -> bool:
@@ -110,6 +120,9 @@ class EpisodeTracker:
         ):
             if key in info and (value := _reduce(info[key], how)) is not None:
                 store.append(value)
+        if "contact_force_trace_n" in info and "contact_trace_dt_s" in info:
+            self._contact.append(np.asarray(info["contact_force_trace_n"], dtype=float))
+            self._contact_dt = float(info["contact_trace_dt_s"])  # type: ignore[arg-type]
 
     def finish(self, reason: str) -> None:
         """End the episode: ``reason`` is "timeout", "terminated", "unstable: …" or "exception: …".
@@ -137,6 +150,14 @@ class EpisodeTracker:
             "peak_contact_force_n": (
                 float(np.max(self._peak_force)) if self._peak_force else math.nan
             ),
+            **self._sustained(),
             "mean_pose_error_m": float(np.mean(self._pose_error)) if self._pose_error else math.nan,
             "failure_reason": self.failure_reason,
         }
+
+    def _sustained(self) -> dict[str, float]:
+        """``contact_p95_n`` and ``contact_over_*`` of the episode's per-tick contact trace
+        (``safety.sustained_contact``); NaN when the env gives no trace."""
+        if not self._contact:
+            return dict.fromkeys(SUSTAINED_COLUMNS, math.nan)
+        return sustained_contact(np.concatenate(self._contact), self._contact_dt)

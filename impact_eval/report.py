@@ -7,7 +7,7 @@ from pathlib import Path
 import pandas as pd
 
 from impact_envs.errors import InvalidArgumentError
-from impact_eval.metrics import EPISODE_COLUMNS, wilson_interval
+from impact_eval.metrics import EPISODE_COLUMNS, SUSTAINED_COLUMNS, wilson_interval
 
 EPISODES_CSV = "episodes.csv"
 SUMMARY_CSV = "summary.csv"
@@ -28,6 +28,8 @@ SUMMARY_COLUMNS: tuple[str, ...] = (
     "energy_std_j",
     "peak_torque_mean_nm",
     "peak_contact_force_mean_n",
+    "contact_p95_mean_n",
+    "contact_over_20n_mean_s",
     "pose_error_mean_m",
     "time_to_success_mean_s",
     "n_unstable",
@@ -38,7 +40,8 @@ SUMMARY_COLUMNS: tuple[str, ...] = (
 
 INTEGER_COLUMNS = ("seed", "episode", "success", "success_once", "length")
 FLOAT_COLUMNS = ("param_value", "time_to_success_s", "energy_j", "peak_torque_nm",
-                 "peak_contact_force_n", "mean_pose_error_m")
+                 "peak_contact_force_n", "contact_p95_n", "contact_over_10n_s",
+                 "contact_over_20n_s", "mean_pose_error_m")
 
 
 def load_episodes(out_dir: Path) -> pd.DataFrame:
@@ -58,7 +61,9 @@ def load_episodes(out_dir: Path) -> pd.DataFrame:
         raise InvalidArgumentError(f"cannot read {path}: {' '.join(str(exc).split())}") from None
     missing = [c for c in EPISODE_COLUMNS if c not in df.columns]
     if missing:
-        raise InvalidArgumentError(f"{path} lacks columns {', '.join(missing)}")
+        older = " (written by an impact-eval before 2026-11-26: rerun the sweep)" if set(
+            missing) <= set(SUSTAINED_COLUMNS) else ""
+        raise InvalidArgumentError(f"{path} lacks columns {', '.join(missing)}{older}")
     if df.empty:
         raise InvalidArgumentError(f"{path} has no episodes")
     for column in (*INTEGER_COLUMNS, *FLOAT_COLUMNS):
@@ -101,6 +106,8 @@ def _summarize_group(g: pd.DataFrame) -> dict[str, object]:
         "energy_std_j": g["energy_j"].std(),
         "peak_torque_mean_nm": g["peak_torque_nm"].mean(),
         "peak_contact_force_mean_n": g["peak_contact_force_n"].mean(),
+        "contact_p95_mean_n": g["contact_p95_n"].mean(),
+        "contact_over_20n_mean_s": g["contact_over_20n_s"].mean(),
         "pose_error_mean_m": g["mean_pose_error_m"].mean(),
         "time_to_success_mean_s": g["time_to_success_s"].mean(),
         "n_unstable": int(reasons.str.startswith("unstable").sum()),

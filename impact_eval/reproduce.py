@@ -7,6 +7,11 @@ arguments, the command that wrote it, the git SHA, the library versions and the 
 committed rows of every other cell and the table's run.json into a scratch directory and
 resumes the sweep there, so the finished file must equal the committed one byte for byte
 (the resume path is exercised too). Every differing cell is printed; exit 1 if any differs.
+
+The bytes hold per CPU instruction set (docs/results.md, "Reproducibility"): each entry records
+the CPU model and widest SIMD of the machine that wrote it. On a machine whose CPU differs, a
+byte difference is reported but not failed; the check there is that every episode's outcome
+(``success``, ``success_once``) equals the committed one.
 ``reproduce --record TABLE ...`` (maintainers) writes the tables' manifest entries from their
 current run.json and episodes.csv.
 """
@@ -20,16 +25,19 @@ import shutil
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NamedTuple
 
 from impact_envs.errors import InvalidArgumentError
 from impact_eval.csvio import encode_rows, read_rows, row_key
 from impact_eval.grid import format_value
-from impact_eval.runinfo import IDENTITY_JSON, RUN_JSON, package_versions
+from impact_eval.runinfo import IDENTITY_JSON, RUN_JSON, cpu_info, package_versions
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 MANIFEST = "manifest.json"
 MANIFEST_FORMAT = 1
 PROG = "impact-eval reproduce"
+OUTCOME_COLUMNS = ("success", "success_once")
+"""Compared across CPUs (the other columns are compared byte for byte on the recording CPU)."""
 Cell = tuple[str, str]
 """``(method, canonical value text)``."""
 
@@ -93,6 +101,7 @@ def record(results: Path, tables: Sequence[str]) -> dict:
             "versions": run.get("versions"),
             "episodes_sha256": sha256(csv_path),
             "rows": len(read_rows(csv_path)),
+            "cpu": {k: (run.get("host") or {}).get(k) for k in ("cpu_model", "simd")},
         }
     path = results / MANIFEST
     path.write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
@@ -128,8 +137,25 @@ def seed_scratch(table_dir: Path, scratch: Path, cells: set[Cell]) -> None:
     (scratch / "episodes.csv").write_text(encode_rows(kept))
 
 
-def compare(committed: Path, rerun: Path) -> list[str]:
-    """One line per (method, value) cell whose rows differ, naming the differing columns."""
+class CellDiff(NamedTuple):
+    """The episodes of one (method, value) cell that differ between two files."""
+
+    cell: Cell
+    differ: int
+    episodes: int
+    outcome: int
+    columns: tuple[str, ...]
+
+    def line(self) -> str:
+        """One line: ``method @ value: k/n episodes differ (j in outcome; columns: ...)``."""
+        named = ", ".join(self.columns) or "rows missing"
+        return (f"{self.cell[0]} @ {float(self.cell[1]):g}: {self.differ}/{self.episodes} "
+                f"episodes differ ({self.outcome} in outcome; columns: {named})")
+
+
+def compare(committed: Path, rerun: Path) -> list[CellDiff]:
+    """The (method, value) cells whose rows differ, with the differing columns; a missing row
+    counts as a differing outcome."""
     def by_cell(path: Path) -> dict[Cell, dict[int, dict[str, str]]]:
         cells: dict[Cell, dict[int, dict[str, str]]] = {}
         for row in read_rows(path):
@@ -138,19 +164,18 @@ def compare(committed: Path, rerun: Path) -> list[str]:
         return cells
 
     old, new = by_cell(committed), by_cell(rerun)
-    lines = []
+    diffs = []
     for cell in sorted(set(old) | set(new), key=lambda c: (c[0], float(c[1]))):
         a, b = old.get(cell, {}), new.get(cell, {})
         episodes = sorted(set(a) | set(b))
         differ = [e for e in episodes if a.get(e) != b.get(e)]
         if differ:
-            columns = sorted({k for e in differ if e in a and e in b
-                              for k in a[e] if a[e][k] != b[e][k]})
-            outcome = sum(a[e]["success"] != b[e]["success"] for e in differ if e in a and e in b)
-            named = ", ".join(columns) or "rows missing"
-            lines.append(f"{cell[0]} @ {float(cell[1]):g}: {len(differ)}/{len(episodes)} "
-                         f"episodes differ ({outcome} in outcome; columns: {named})")
-    return lines
+            both = [e for e in differ if e in a and e in b]
+            columns = tuple(sorted({k for e in both for k in a[e] if a[e][k] != b[e][k]}))
+            outcome = sum(any(a[e][k] != b[e][k] for k in OUTCOME_COLUMNS) for e in both)
+            diffs.append(CellDiff(cell, len(differ), len(episodes),
+                                  outcome + len(differ) - len(both), columns))
+    return diffs
 
 
 def parser() -> argparse.ArgumentParser:
@@ -191,14 +216,24 @@ def rerun(results: Path, table: str, a: argparse.Namespace, out: Path) -> int:
     if code not in (0, 1):
         return code
     diffs = compare(table_dir / "episodes.csv", out / "episodes.csv")
-    same = sha256(out / "episodes.csv") == entry["episodes_sha256"]
-    for line in diffs:
-        print(f"{PROG}: differs: {table}: {line}")
+    digest = sha256(out / "episodes.csv")
+    same = digest == entry["episodes_sha256"]
+    for diff in diffs:
+        print(f"{PROG}: differs: {table}: {diff.line()}")
     scope = f"cells {a.cells}" if a.cells else "the whole table"
     verdict = "identical" if same and not diffs else "DIFFERENT"
     print(f"{PROG}: {table} ({scope}): episodes.csv {verdict} to the committed bytes "
-          f"(sha256 {entry['episodes_sha256'][:12]}; rerun in {out})")
-    return 0 if same and not diffs else 1
+          f"(sha256 {entry['episodes_sha256'][:12]}, rerun {digest[:12]}; rerun in {out})")
+    if same and not diffs:
+        return 0
+    recorded, here = entry.get("cpu") or {}, cpu_info()
+    if recorded and recorded != here:
+        flips = sum(diff.outcome for diff in diffs)
+        print(f"{PROG}: {table}: recorded on {recorded.get('cpu_model')} "
+              f"({recorded.get('simd')}), rerun on {here['cpu_model']} ({here['simd']}): bytes "
+              f"are not comparable across CPUs; {flips} episode outcomes differ")
+        return 1 if flips else 0
+    return 1
 
 
 def main(argv: Sequence[str]) -> int:

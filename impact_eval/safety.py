@@ -4,8 +4,9 @@ The peak contact force of an episode is dominated by one instant (a hammer set d
 striking an object); the measures here read the whole contact-force trace instead, sampled
 every few ticks by the closed loop: the 95th percentile of the force and the time spent above
 10 N and above 20 N. A press that ratchets shows in all three; setting a heavy object down
-shows in the peak only. They become ``episodes.csv`` columns with the issue-26 rerun of every
-reference table (adding a column changes every table's bytes).
+shows in the peak only. They are ``episodes.csv`` columns (``metrics.SUSTAINED_COLUMNS``),
+computed from the env's ``info["contact_force_trace_n"]``: per tick, each sample held over
+the ticks since the previous one.
 """
 
 from __future__ import annotations

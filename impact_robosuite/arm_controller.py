@@ -22,7 +22,9 @@ import numpy as np
 from robosuite.controllers.parts.controller import Controller
 from scipy.spatial.transform import Rotation
 
+from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import ImpactController
+from impact_envs.control.limits import LIBFRANKA_DELTA_T_S
 from impact_envs.control.presets import preset_config
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.robot.mujoco_arm import MujocoArm
@@ -69,7 +71,7 @@ class ImpactArmController(Controller):
         self.output_max = self.nums2array(output_max, 6)
         self.output_min = self.nums2array(output_min, 6)
         self.goal_update_mode = goal_update_mode
-        config = dataclasses.replace(preset_config(preset), dt_s=float(model.opt.timestep))
+        config = preset_at_timestep(preset, float(model.opt.timestep))
         self.arm_model = MujocoArm(model, self.joint_names, ref_name, sim.data.qpos.copy())
         self.core = ImpactController(self.arm_model, config, mode)
         noise = SensorNoise() if sensor_noise else SensorNoise.off()
@@ -128,3 +130,14 @@ class ImpactArmController(Controller):
                                          np.array([w, x, y, z]), gripper_width_m=width)
         super().run_controller()
         return self.torques
+
+
+def preset_at_timestep(preset: str, dt_s: float) -> ControllerConfig:
+    """Preset ``preset`` at controller period ``dt_s`` [s]: libfranka's rate limiter needs
+    1 ms, so another period limits the torque rate per tick (``rate_limiter="per_tick_clip"``,
+    the same 999.999 Nm/s)."""
+    config = preset_config(preset)
+    if dt_s != LIBFRANKA_DELTA_T_S:
+        config = dataclasses.replace(
+            config, limits=dataclasses.replace(config.limits, rate_limiter="per_tick_clip"))
+    return dataclasses.replace(config, dt_s=dt_s)

@@ -10,6 +10,7 @@ import pytest
 from impact_envs.control.config import ContactGuardConfig, ControllerConfig
 from impact_envs.control.contact_guard import ContactGuard, guard_feedforward
 from impact_envs.control.controller import ImpactController
+from impact_envs.control.presets import preset_config
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.robot.ik import HOME_Q
 from impact_eval.experiments.physics import Rig
@@ -19,12 +20,12 @@ GUARD_ON = ContactGuardConfig(enabled=True)
 
 
 def test_guard_keeps_a_rigid_press_at_the_impedance_force() -> None:
-    """A closed hand held 30 mm inside a rigid plate tilted by 40 deg: the shipped `default`
-    ratchets the press up; with the guard the steady force stays within 3 N of impedance's
-    and does not grow after 2 s."""
+    """A closed hand held 30 mm inside a rigid plate tilted by 40 deg: `default` without its
+    guard ratchets the press up; with it (as shipped) the steady force stays within 3 N of
+    impedance's and does not grow after 2 s."""
     ref = press("impedance", 40.0, 0.03, 4.0, seed=1)
-    guarded = press("impact_guard", 40.0, 0.03, 4.0, seed=1)
-    unguarded = press("impact", 40.0, 0.03, 4.0, seed=1)
+    guarded = press("impact", 40.0, 0.03, 4.0, seed=1)
+    unguarded = press("impact_unguarded", 40.0, 0.03, 4.0, seed=1)
     assert ref["steady_force_n"] > 10.0  # it is a real press
     assert guarded["steady_force_n"] <= ref["steady_force_n"] + 3.0
     assert abs(guarded["growth_after_2s_n"]) < 0.5 and guarded["holds"] >= 1
@@ -67,12 +68,13 @@ def test_bounds_limit_the_rate_and_size_of_the_feedforward() -> None:
 
 
 def test_disabled_guard_changes_nothing() -> None:
-    guard = ContactGuard(ContactGuardConfig(), 0.001, 400.0)
+    guard = ContactGuard(ContactGuardConfig(enabled=False), 0.001, 400.0)
     w = np.array([4000.0, 0.0, -3000.0, 0.0, 600.0, 0.0])
     before = w.copy()
     guard_feedforward(w, np.ones(6), guard.buffer)
     np.testing.assert_array_equal(w, before)
-    assert ControllerConfig().guard == ContactGuardConfig(enabled=False)
+    assert ControllerConfig().guard == GUARD_ON  # default: on
+    assert preset_config("paper").guard == ContactGuardConfig(enabled=False)  # paper: off
 
 
 @pytest.mark.parametrize("kwargs", [{"growth_step_n": 0.0}, {"force_max_n": -1.0},

@@ -10,6 +10,7 @@ import torch
 from fake_dynamics import ConstantArmDynamics
 
 from impact_envs.control.config import (
+    ContactGuardConfig,
     ControllerConfig,
     EstimatorConfig,
     LimitsConfig,
@@ -17,6 +18,7 @@ from impact_envs.control.config import (
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.internal_model import OUTPUT_SCALE
 from impact_envs.control.lie import matrix_to_quat
+from impact_envs.control.limits import LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S
 from impact_envs.control.presets import preset_config
 from impact_envs.errors import InvalidArgumentError
 
@@ -36,9 +38,12 @@ def _constant_model(ctrl: ImpactController, wrench: np.ndarray) -> None:
     ctrl.internal_model.learning_enabled = False
 
 
-def _make(mode: str, limits: LimitsConfig = NO_LIMITS) -> tuple:
+def _make(mode: str, limits: LimitsConfig = NO_LIMITS, guard: bool = False) -> tuple:
+    """A controller on the constant arm; the contact guard off unless ``guard`` (these tests
+    check the feedforward path itself; tests/test_contact_guard.py tests the guard)."""
     dyn = ConstantArmDynamics(seed=21)
-    ctrl = ImpactController(dyn, ControllerConfig(limits=limits), mode=mode)
+    config = ControllerConfig(limits=limits, guard=ContactGuardConfig(enabled=guard))
+    ctrl = ImpactController(dyn, config, mode=mode)
     q0 = np.full(7, 0.1)
     ctrl.reset(q0)
     dyn.update(q0, np.zeros(7))
@@ -251,8 +256,9 @@ def test_with_pinocchio_arm_runs_and_holds_still() -> None:
         tau = ctrl.compute(q, dq, gravity, pos_d + [0.01, 0.0, 0.0], quat_d)
         np.testing.assert_allclose(ctrl.signals.wrench_imp_world[:3], [4.0, 0.0, 0.0], atol=1e-6)
         wanted = arm.jacobian.T @ ctrl.signals.wrench_imp_world
-        np.testing.assert_allclose(tau - gravity, np.clip(wanted, -1.0, 1.0), atol=1e-9)
-        assert np.abs(wanted).max() > 1.0  # the 1 Nm/tick rate limit was active
+        step = LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S * 1e-3  # libfranka's limit per 1 ms tick
+        np.testing.assert_allclose(tau - gravity, np.clip(wanted, -step, step), atol=1e-9)
+        assert np.abs(wanted).max() > 1.0  # the rate limit was active
 
 
 def test_beyond_hardware_limits_names_each_setting_above_the_fr3() -> None:

@@ -55,6 +55,37 @@ def test_tracker_missing_info_keys_give_nan() -> None:
     assert row["failure_reason"] == "timeout"
 
 
+def test_tracker_sustained_contact_columns_from_the_per_tick_trace() -> None:
+    """Two steps of 4 ticks at 1 ms: 3 ticks above 10 N, 2 above 20 N; p95 of the 8 ticks."""
+    tracker = EpisodeTracker(policy_dt=0.004)
+    for trace in ([0.0, 12.0, 25.0, 5.0], [30.0, 1.0, 0.0, 0.0]):
+        tracker.update({"contact_force_trace_n": np.array(trace), "contact_trace_dt_s": 1e-3})
+    tracker.finish("timeout")
+    row = tracker.row()
+    assert row["contact_over_10n_s"] == pytest.approx(3e-3)
+    assert row["contact_over_20n_s"] == pytest.approx(2e-3)
+    assert row["contact_p95_n"] == pytest.approx(
+        np.percentile([0, 12, 25, 5, 30, 1, 0, 0], 95))
+
+
+def test_env_contact_trace_is_per_tick_and_peaks_at_the_peak() -> None:
+    from impact_envs.policies.experts import make_expert
+    from impact_envs.policies.interface import stack_obs
+
+    env, expert = gym.make("IMPACT/Hammer-v0"), make_expert("IMPACT/Hammer-v0")
+    obs, _ = env.reset(seed=3)
+    expert.reset(1)
+    peaks = []
+    for _ in range(150):  # the expert grasps the hammer and strikes the nail
+        obs, _, _, _, info = env.step(expert.act(stack_obs([obs]))[0])
+        trace = info["contact_force_trace_n"]
+        assert trace.shape in ((33,), (34,)) and info["contact_trace_dt_s"] == 1e-3
+        assert trace.min() >= 0.0 and trace.max() == info["peak_contact_force_n"]
+        peaks.append(trace.max())
+    assert max(peaks) > 10.0  # a real contact
+    env.close()
+
+
 def test_tracker_success_and_crash() -> None:
     ok = EpisodeTracker(policy_dt=0.1)
     ok.update({"is_success": True, "pose_error_m": 0.2})

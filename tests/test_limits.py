@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from impact_envs.control.config import LimitsConfig
-from impact_envs.control.limits import TorqueLimiter, limit_rate, saturate
+from impact_envs.control.limits import TorqueLimiter, libfranka_limits, limit_rate, saturate
 from impact_envs.errors import InvalidArgumentError
 
 TAU_MAX = np.array([87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0])
@@ -30,8 +30,16 @@ def test_limiter_defaults_are_fr3() -> None:
     assert limiter.max_delta_nm == pytest.approx(1.0)
 
 
+CLIP_1000 = LimitsConfig(torque_rate_max_nm_per_s=1000.0, rate_limiter="per_tick_clip")
+"""The per-tick clip at 1000 Nm/s (the limiter of the tables before 2026-11-26): 1 Nm/tick."""
+
+
+def test_default_limits_are_libfranka_s() -> None:
+    assert LimitsConfig() == libfranka_limits()
+
+
 def test_limiter_ramps_a_step_at_1nm_per_tick_then_saturates() -> None:
-    limiter = TorqueLimiter(LimitsConfig(), dt_s=0.001)
+    limiter = TorqueLimiter(CLIP_1000, dt_s=0.001)
     gravity = np.zeros(7)
     request = np.full(7, 50.0)
     history = np.array([limiter.apply(request, gravity).copy() for _ in range(60)])
@@ -58,7 +66,7 @@ def test_limiter_state_follows_saturated_output() -> None:
 
 
 def test_limiter_reset() -> None:
-    limiter = TorqueLimiter(LimitsConfig(), dt_s=0.001)
+    limiter = TorqueLimiter(CLIP_1000, dt_s=0.001)
     limiter.reset(np.full(7, 5.0))
     np.testing.assert_allclose(limiter.apply(np.zeros(7), np.zeros(7)), 4.0)
     limiter.reset()

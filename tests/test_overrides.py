@@ -17,7 +17,7 @@ def test_overrides_parse_by_field_type_and_leave_the_rest() -> None:
         base,
         [
             "internal_model.slow_rate_max=1.5",
-            "internal_model.update_every=2",
+            "internal_model.update_every=8",
             "slow_wrench.rate_force_per_s=20",
             "impedance.stiffness_translational_n_per_m=800,800,800",
             "impedance.compensate_coriolis=false",
@@ -26,7 +26,7 @@ def test_overrides_parse_by_field_type_and_leave_the_rest() -> None:
         ],
     )
     assert cfg.internal_model.slow_rate_max == 1.5
-    assert cfg.internal_model.update_every == 2 and isinstance(cfg.internal_model.update_every, int)
+    assert cfg.internal_model.update_every == 8 and isinstance(cfg.internal_model.update_every, int)
     assert cfg.slow_wrench.rate_force_per_s == 20.0
     assert cfg.impedance.stiffness_translational_n_per_m == (800.0, 800.0, 800.0)
     assert cfg.impedance.compensate_coriolis is False

@@ -74,6 +74,46 @@ def test_a_changed_row_is_reported_by_cell(results: Path) -> None:
     assert "DIFFERENT" in other.stdout
 
 
+def _set_recorded_cpu(results: Path, cpu: dict) -> None:
+    path = results / "manifest.json"
+    manifest = json.loads(path.read_text())
+    manifest["tables"]["fake"]["cpu"] = cpu
+    path.write_text(json.dumps(manifest))
+
+
+def _edit_first_row(results: Path, column: int, value: str) -> None:
+    path = results / "fake" / "episodes.csv"
+    lines = path.read_text().splitlines(keepends=True)
+    fields = lines[1].split(",")
+    fields[column] = value
+    lines[1] = ",".join(fields)
+    path.write_text("".join(lines))
+
+
+def test_the_manifest_records_the_cpu(results: Path) -> None:
+    entry = json.loads((results / "manifest.json").read_text())["tables"]["fake"]
+    assert set(entry["cpu"]) == {"cpu_model", "simd"} and entry["cpu"]["simd"]
+
+
+def test_on_another_cpu_floats_may_differ_but_outcomes_may_not(results: Path) -> None:
+    _set_recorded_cpu(results, {"cpu_model": "Some Other CPU", "simd": "avx2"})
+    _edit_first_row(results, 10, "123.456")  # energy_j: a float column
+    floats = reproduce(results, "--check", "fake")
+    assert floats.returncode == 0, floats.stdout + floats.stderr
+    assert "DIFFERENT" in floats.stdout and "0 episode outcomes differ" in floats.stdout
+    path = results / "fake" / "episodes.csv"
+    row = path.read_text().splitlines()[1].split(",")
+    _edit_first_row(results, 6, "0" if row[6] == "1" else "1")  # success
+    outcome = reproduce(results, "--check", "fake")
+    assert outcome.returncode == 1 and "1 episode outcomes differ" in outcome.stdout
+
+
+def test_on_the_recording_cpu_any_byte_fails(results: Path) -> None:
+    _edit_first_row(results, 10, "123.456")
+    done = reproduce(results, "--check", "fake")
+    assert done.returncode == 1 and "DIFFERENT" in done.stdout
+
+
 @pytest.mark.parametrize("args,message", [
     (["--check", "nope"], "unknown table 'nope'; valid choices: fake"),
     (["--check", "fake", "--cells", "fake_fast@7"], "invalid cell 'fake_fast@7'"),

@@ -33,8 +33,7 @@ Force part, as vectors in the world frame, every tick (``contact_guard_step``):
 Then the applied feedforward is bounded: its rate (force ``force_rate_max_n_per_s``, torque
 ``torque_rate_max_nm_per_s``) and its size (``force_max_n``, ``torque_max_nm``), both as
 vector norms. The torque axes are bounded only (no blocked test). ``enabled=False`` (the
-``paper`` preset, and for now ``default``: see ``ContactGuardConfig``) leaves every number
-exactly as before.
+``paper`` preset) leaves the feedforward exactly as predicted.
 """
 
 from __future__ import annotations
@@ -60,8 +59,8 @@ class ContactGuardConfig:
     """Contact guard and bounds on the feedforward wrench (world frame).
 
     Attributes:
-        enabled: Run the guard and the bounds. False leaves the feedforward as predicted
-            (the behaviour of every published table until the issue-26 rerun).
+        enabled: Run the guard and the bounds (default True; the ``paper`` preset: False,
+            the feedforward exactly as predicted).
         growth_step_n: Growth of the predicted force [N] that triggers the blocked test, and
             the fall below the hold that releases it.
         follow_delay_s: Wait after the growth before testing [s] (lets a free load move:
@@ -78,7 +77,7 @@ class ContactGuardConfig:
         torque_rate_max_nm_per_s: Bound on the rate of the torque feedforward [Nm/s].
     """
 
-    enabled: bool = False
+    enabled: bool = True
     growth_step_n: float = 2.0
     follow_delay_s: float = 0.1
     give_fraction: float = 0.5

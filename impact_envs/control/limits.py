@@ -4,9 +4,10 @@ libfranka (``rate_limiting.h``, ``command_saturation.cpp``) limits the torque ra
 command without gravity as ``last + clamp((cmd - last) / kDeltaT, -max, max) * kDeltaT`` with
 ``kDeltaT = 1e-3`` s and ``kMaxTorqueRate = 1000 - kLimitEps = 999.999`` Nm/s; the robot's own
 ``controller_torque_discontinuity`` reflex trips at 1000 Nm/s. ``rate_limiter="libfranka"``
-reproduces that operation for operation (bit for bit, tests/test_limits.py);
-``"per_tick_clip"`` (``last + clip(cmd - last, +-rate * dt)``) is the limiter every published
-table was computed with. docs/controller.md, "Limits on the torque interface".
+reproduces that operation for operation (bit for bit, tests/test_limits.py) and is the default
+since 2026-11-26; ``"per_tick_clip"`` (``last + clip(cmd - last, +-rate * dt)``, at 1000 Nm/s)
+is the limiter the tables before that date were computed with, and the one for a controller
+period other than 1 ms. docs/controller.md, "Limits on the torque interface".
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ LIBFRANKA_DELTA_T_S = 1e-3
 """libfranka's ``kDeltaT`` [s]: the period its ``limitRate`` divides and multiplies by."""
 LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S = 1000.0 - 1e-3
 """libfranka's ``kMaxTorqueRate`` = 1000 - ``kLimitEps`` [Nm/s] (999.999, every joint)."""
+FR3_TORQUE_RATE_REFLEX_NM_PER_S = 1000.0
+"""The torque rate [Nm/s] at which the FR3's ``controller_torque_discontinuity`` reflex trips."""
 RATE_LIMITERS: tuple[str, ...] = ("per_tick_clip", "libfranka")
 """Valid ``LimitsConfig.rate_limiter`` values."""
 
@@ -35,16 +38,16 @@ class LimitsConfig:
     Attributes:
         torque_max_nm: Symmetric per-joint torque bound [Nm] (FR3: 87 x4, 12 x3).
         torque_rate_max_nm_per_s: Bound on |d tau / dt| of the command without gravity
-            [Nm/s] (1000, the robot's reflex threshold; libfranka limits to
-            ``LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S`` = 999.999, see ``libfranka_limits``).
-        rate_limiter: ``"per_tick_clip"``: last + clip(cmd - last, +-rate * dt);
-            ``"libfranka"``: libfranka's ``limitRate`` operation for operation (requires
-            the controller's dt_s = 1 ms, libfranka's ``kDeltaT``).
+            [Nm/s] (libfranka's ``LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S`` = 999.999; the robot's
+            reflex trips at 1000).
+        rate_limiter: ``"libfranka"`` (default): libfranka's ``limitRate`` operation for
+            operation (requires the controller's dt_s = 1 ms, libfranka's ``kDeltaT``);
+            ``"per_tick_clip"``: last + clip(cmd - last, +-rate * dt), any dt.
     """
 
     torque_max_nm: tuple[float, ...] = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
-    torque_rate_max_nm_per_s: float = 1000.0
-    rate_limiter: str = "per_tick_clip"
+    torque_rate_max_nm_per_s: float = LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S
+    rate_limiter: str = "libfranka"
 
     def __post_init__(self) -> None:
         values = tuple(float(v) for v in self.torque_max_nm)
@@ -56,7 +59,8 @@ class LimitsConfig:
 
 
 def libfranka_limits() -> LimitsConfig:
-    """The limits exactly as libfranka enforces them on an FR3's torque interface."""
+    """The limits exactly as libfranka enforces them on an FR3's torque interface (the
+    defaults since 2026-11-26, spelled out)."""
     return LimitsConfig(torque_rate_max_nm_per_s=LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S,
                         rate_limiter="libfranka")
 
@@ -67,9 +71,9 @@ def beyond_hardware_limits(limits: LimitsConfig) -> list[str]:
     above = [f"limits.torque_max_nm[{i}]={v:g} > {hw:g} Nm"
              for i, (v, hw) in enumerate(zip(limits.torque_max_nm, fr3.torque_max_nm,
                                              strict=True)) if v > hw]
-    if limits.torque_rate_max_nm_per_s > fr3.torque_rate_max_nm_per_s:
+    if limits.torque_rate_max_nm_per_s > FR3_TORQUE_RATE_REFLEX_NM_PER_S:
         above.append(f"limits.torque_rate_max_nm_per_s={limits.torque_rate_max_nm_per_s:g} > "
-                     f"{fr3.torque_rate_max_nm_per_s:g} Nm/s")
+                     f"{FR3_TORQUE_RATE_REFLEX_NM_PER_S:g} Nm/s")
     return above
 
 

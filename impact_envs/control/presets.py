@@ -25,6 +25,10 @@ DEPARTURES: dict[str, str] = {
     "slow_wrench.rate_force_per_s": "2.0",
     "internal_model.learning_rate": "0.01",
     "internal_model.surprise_open_n": "5.0",
+    "guard.enabled": "False",
+    "limits.rate_limiter": "per_tick_clip",
+    "limits.torque_rate_max_nm_per_s": "1000.0",
+    "internal_model.learner": "numpy",
 }
 """Fields where ``default`` differs from ``paper``, with the paper's value (``SECTION.FIELD``
 keys, the syntax of ``--controller-set``; ``revert_departure`` applies one)."""

@@ -319,7 +319,7 @@ class ImpactEnv(gym.Env):
 
     def _run_ticks(self, pos0, quat0, pos1, quat1, gripper: float,
                    wrench_cmd: np.ndarray | None, learn_mask: np.ndarray | None
-                   ) -> dict[str, float]:
+                   ) -> dict[str, Any]:
         """Run the 33/34 control ticks of one policy step; return the step's metrics.
 
         The targets of all ticks are interpolated up front (one vectorized lerp / slerp), and
@@ -339,7 +339,9 @@ class ImpactEnv(gym.Env):
         return {"energy_j": float(np.sum(power * self.sim.dt)),
                 "peak_torque_nm": float(np.abs(trace.taus).max()),
                 "peak_robot_contact_force_n": trace.peak_robot_contact_n,
-                "peak_object_contact_force_n": trace.peak_object_contact_n}
+                "peak_object_contact_force_n": trace.peak_object_contact_n,
+                "contact_robot_trace_n": trace.contact_robot_n,
+                "contact_object_trace_n": trace.contact_object_n}
 
     # ------------------------------------------------------------- observation
     def _observation(self) -> dict[str, np.ndarray]:
@@ -355,7 +357,7 @@ class ImpactEnv(gym.Env):
         return {k: np.clip(np.asarray(obs[k], dtype=np.float32), space.low, space.high)
                 for k, space in self.observation_space.spaces.items()}
 
-    def _info(self, success: bool, metrics: dict[str, float] | None) -> dict[str, Any]:
+    def _info(self, success: bool, metrics: dict[str, Any] | None) -> dict[str, Any]:
         s = self.controller.signals
         pos_error = self._target_pos - self.sim.tcp_pose()[0]
         info: dict[str, Any] = {
@@ -373,14 +375,20 @@ class ImpactEnv(gym.Env):
             "controller_preset": self.controller_preset,
             "tau_nm": self.sim.tau_applied.copy(),
         }
-        m = metrics or {"energy_j": 0.0, "peak_torque_nm": 0.0,
-                        "peak_robot_contact_force_n": 0.0, "peak_object_contact_force_n": 0.0}
+        m = dict(metrics or {"energy_j": 0.0, "peak_torque_nm": 0.0,
+                             "peak_robot_contact_force_n": 0.0,
+                             "peak_object_contact_force_n": 0.0,
+                             "contact_robot_trace_n": np.zeros(0),
+                             "contact_object_trace_n": np.zeros(0)})
+        robot, obj = m.pop("contact_robot_trace_n"), m.pop("contact_object_trace_n")
         info.update(m)
         # safety: robot-environment contact, or object-environment contact in excess of the
         # object's own weight resting on a support (impacts, pressing, dragging)
         weight = 9.81 * self._episode_params.get("object_mass", 0.0)
         info["peak_contact_force_n"] = max(m["peak_robot_contact_force_n"],
                                            m["peak_object_contact_force_n"] - weight, 0.0)
+        info["contact_force_trace_n"] = np.maximum(np.maximum(robot, obj - weight), 0.0)
+        info["contact_trace_dt_s"] = self.sim.dt
         info.update({k: float(v) for k, v in self._episode_params.items()})
         info.update(self.task.info(self.sim))
         return info

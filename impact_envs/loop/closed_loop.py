@@ -29,8 +29,10 @@ CONTACT_EVERY = 4
 
 class StepTrace(NamedTuple):
     """What one policy step's ticks leave: per-tick ``taus`` (n, 7) [Nm] and ``qvels`` (n, 7)
-    [rad/s], the last sensed ``q`` [rad] and ``dq`` [rad/s], and the peak contact forces [N]
-    on the robot and on the objects (``FrankaSim.contact_forces``)."""
+    [rad/s], the last sensed ``q`` [rad] and ``dq`` [rad/s], the peak contact forces [N] on
+    the robot and on the objects (``FrankaSim.contact_forces``), and both forces per tick
+    ``contact_robot_n`` / ``contact_object_n`` (n,) [N], each sample held over the ticks
+    since the previous one (sampled every ``CONTACT_EVERY`` ticks and on the last)."""
 
     taus: np.ndarray
     qvels: np.ndarray
@@ -38,6 +40,8 @@ class StepTrace(NamedTuple):
     dq: np.ndarray
     peak_robot_contact_n: float
     peak_object_contact_n: float
+    contact_robot_n: np.ndarray
+    contact_object_n: np.ndarray
 
 
 class TickTargets(NamedTuple):
@@ -92,7 +96,8 @@ class ClosedLoop:
         sim_arrays, state = sim.loop_arrays(), ctrl.kernel_state()
         tick = self._entry((0, sim.friction_torque(), plan, sim_arrays, self.arm, self._dyn,
                             state))
-        peak_robot = peak_obj = 0.0
+        contact = np.empty((n, 2))
+        last = 0
         hook, data = self.tick_hook, sim.data
         for i in range(n):
             if hook is not None:
@@ -102,13 +107,15 @@ class ClosedLoop:
                 self._raise_or_learn(i, flags, plan, targets.learn_mask)
             sim.step()
             if (i + 1) % CONTACT_EVERY == 0 or i == n - 1:
-                f_robot, f_obj = sim.contact_forces()
-                peak_robot, peak_obj = max(peak_robot, f_robot), max(peak_obj, f_obj)
+                contact[last:i + 1] = sim.contact_forces()
+                last = i + 1
         sim.check_finite()
         plan.qvels[-1] = sim_arrays.qvel_arm
         ctrl.finish_tick(0, plan.quat_targets[-1], targets.learn_mask)
         q, dq = plan.sensed[:7].copy(), plan.sensed[7:14].copy()
-        return StepTrace(plan.taus, plan.qvels, q, dq, peak_robot, peak_obj)
+        peak_robot, peak_obj = (max(float(v), 0.0) for v in contact.max(axis=0))
+        return StepTrace(plan.taus, plan.qvels, q, dq, peak_robot, peak_obj,
+                         contact[:, 0], contact[:, 1])
 
     def _raise_or_learn(self, i: int, flags: int, plan: StepPlan,
                         learn_mask: np.ndarray | None) -> None:

@@ -7,10 +7,12 @@ along the inward normal to ``--depths`` [mm] below the surface and stays there f
 ``--hold-s`` seconds; the hand cannot follow, so the impedance law presses with about
 K x depth. Reported per mode: the steady contact force (mean of the last second), its growth
 from 2 s after arrival to the end, and the largest predicted force [N]. Acceptance (issue 26):
-with the contact guard, steady force <= impedance's + 3 N, growth <= 0.5 N, prediction bounded.
+with the contact guard (``impact``), steady force <= impedance's + 3 N, growth <= 0.5 N,
+prediction bounded.
 
-Modes: ``impedance``; ``impact`` (the ``default`` preset as shipped); ``impact_guard``
-(``default`` with ``guard.enabled=True``); ``paper``. Sensor noise on, seed ``--seed``.
+Modes: ``impedance``; ``impact`` (the ``default`` preset as shipped, contact guard on);
+``impact_unguarded`` (``default`` with ``guard.enabled=False``); ``paper``. Sensor noise on,
+seed ``--seed``.
 """
 
 from __future__ import annotations
@@ -31,15 +33,15 @@ from impact_envs.loop import control_tick
 from impact_envs.robot.ik import HOME_Q
 from impact_eval.experiments.physics import Rig
 
-MODES = ("impedance", "impact", "impact_guard", "paper")
+MODES = ("impedance", "impact", "impact_unguarded", "paper")
 GAP_M, APPROACH_S, PLATE_HALF_THICKNESS_M = 0.03, 1.0, 0.02
 
 
 def mode_controller(mode: str) -> tuple[str, ControllerConfig]:
     """(controller mode, config) of a press mode."""
     base = preset_config("paper" if mode == "paper" else "default")
-    if mode == "impact_guard":
-        base = replace(base, guard=replace(base.guard, enabled=True))
+    if mode == "impact_unguarded":
+        base = replace(base, guard=replace(base.guard, enabled=False))
     return ("impedance" if mode == "impedance" else "impact"), base
 
 

@@ -10,10 +10,11 @@ The thread's own CPU time is recorded beside the wall time: a tick whose wall ti
 above its CPU time was preempted by the OS (a 2-core machine shared with other processes; a
 robot PC runs the loop on an isolated core with a real-time kernel). Prints and writes
 (``DIR/latency.json``) the percentiles, the maximum and the count over the
-budget, for all ticks and for learning ticks (gate open), per learner (``numpy``: Python + BLAS
-after the tick, the shipped ``default``; ``numba``: inside the tick, spread over ticks, with the
-contact guard on and libfranka's limits: the configuration meant for an FR3). Budget (issue
-26): p99.9 <= 0.3 ms and max <= 0.8 ms per tick on one core of the 2-core development machine.
+budget, for all ticks and for learning ticks (gate open), per learner of the shipped
+``default`` (contact guard on, libfranka's limits): ``numba`` (its learner since 2026-11-26:
+inside the tick, spread over ticks) and ``numpy`` (Python + BLAS after the tick, the learner
+before that date). Budget (issue 26): p99.9 <= 0.3 ms and max <= 0.8 ms per tick on one core
+of the 2-core development machine.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from impact_envs.control.config import ControllerConfig, libfranka_limits
+from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import ImpactController
 from impact_envs.robot.ik import HOME_Q
 from impact_eval.experiments.physics import Rig
@@ -40,10 +41,8 @@ BUDGET_P999_S, BUDGET_MAX_S = 0.3e-3, 0.8e-3
 def measure(learner: str, seconds: float, switch_s: float, seed: int) -> dict[str, np.ndarray]:
     """Per-tick compute time [s] and learning flag over ``seconds`` of simulated hold."""
     rig = Rig.build("payload_scene.xml", "impact", "residual", seed)
-    base = ControllerConfig()
+    base = ControllerConfig()  # the shipped default: guard on, libfranka's limits, numba
     cfg = replace(base, internal_model=replace(base.internal_model, learner=learner))
-    if learner == "numba":  # the configuration meant for an FR3: guard on, libfranka's limits
-        cfg = replace(cfg, guard=replace(cfg.guard, enabled=True), limits=libfranka_limits())
     ctrl = ImpactController(rig.arm, cfg, mode="impact")
     rig = Rig(rig.sim, rig.arm, ctrl, rig.rng)
     sim, model = rig.sim, rig.sim.model

@@ -32,10 +32,10 @@ class InternalModelConfig:
         replay_capacity: FIFO capacity of the replay buffer [samples] (own choice: 256).
         replay_period: Ticks between stored quasi-steady samples (own choice: 10, i.e. 10 ms).
         seed: Seed of the weight initialisation and of replay sampling.
-        learner: Where replay and SGD run: ``"numpy"`` (in Python after the tick, NumPy BLAS,
-            one whole step on its tick: the learner of every published table) or
-            ``"numba"`` (inside the tick, spread over ticks: a bounded tick,
-            ``internal_model/learner.py``).
+        learner: Where replay and SGD run: ``"numba"`` (default: inside the tick, spread
+            over ticks: a bounded tick, ``internal_model/learner.py``) or ``"numpy"`` (in
+            Python after the tick, NumPy BLAS, one whole step on its tick: the learner of the
+            tables before 2026-11-26).
         samples_per_tick: With ``learner="numba"``, batch samples processed per tick (own
             choice 4: a batch-16 step over 4 ticks; docs/controller.md "A bounded tick").
         wrench_feature: Feed the estimated wrench to the network (default True, as both
@@ -54,7 +54,7 @@ class InternalModelConfig:
     replay_capacity: int = 256
     replay_period: int = 10
     seed: int = 0
-    learner: str = "numpy"
+    learner: str = "numba"
     samples_per_tick: int = 4
     wrench_feature: bool = True
 
