@@ -1,12 +1,16 @@
 """``impact-robot``: IMPACT on an FR3 (or a libfranka-protocol simulator) through pylibfranka.
 
     impact-robot check --host HOST [--seconds S]
-        connect, print the robot mode and errors, our TCP against the robot's O_T_EE, and the
-        loop timing over S seconds of zero torques (the robot's gravity compensation alone)
-    impact-robot hold --host HOST [--controller impact|impedance] [--seconds S] [--out DIR]
+        connect, print the robot mode and errors, our model against Franka's at the current
+        configuration, our TCP against the robot's O_T_EE, and the loop timing over S seconds
+        of zero torques (the robot's gravity compensation alone)
+    impact-robot hold --host HOST [--controller impact|impedance] [--preset default|paper]
+                      [--model pinocchio|franka] [--max-payload-kg KG] [--seconds S] [--out DIR]
         hold the current TCP pose with the FR3 configuration (fci.fr3_config); DIR gets
-        ticks.csv (one row per control tick) and run.json
+        ticks.csv (one row per control tick), run.json and protocol.png/.pdf
 
+Both set the collision thresholds for ``--max-payload-kg`` (collision.py) and refuse to start
+while the robot reports errors unless ``--recover`` (libfranka's automatic error recovery).
 Exit 0 after a clean finish; 1 with one line naming the robot's errors otherwise; 2 on bad
 arguments. A real robot needs a real-time kernel (``--realtime enforce``).
 """
@@ -18,10 +22,12 @@ import json
 import sys
 from pathlib import Path
 
+from impact_envs.control.presets import PRESETS
 from impact_envs.errors import ImpactError
 
 CONTROLLERS = ("impact", "impedance")
 REALTIME = ("ignore", "enforce")
+MODELS = ("pinocchio", "franka")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -33,8 +39,17 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--seconds", type=float, default=2.0)
         p.add_argument("--realtime", choices=REALTIME, default="ignore",
                        help="libfranka RealtimeConfig (enforce: needs a real-time kernel)")
+        p.add_argument("--max-payload-kg", type=float, default=0.0,
+                       help="largest load handed over without set_load; raises the collision "
+                       "thresholds by 1.5x what it reads (docs/franka.md)")
+        p.add_argument("--recover", action="store_true",
+                       help="call automatic_error_recovery if the robot reports errors")
         if name == "hold":
             p.add_argument("--controller", choices=CONTROLLERS, default="impact")
+            p.add_argument("--preset", choices=PRESETS, default="default")
+            p.add_argument("--model", choices=MODELS, default="pinocchio",
+                           help="controller's dynamics: ours, or Franka's Model (its Jacobian, "
+                           "inertia and gravity)")
             p.add_argument("--out", type=Path, default=None,
                            help="write DIR/ticks.csv (one row per tick) and DIR/run.json")
     return parser
@@ -50,27 +65,27 @@ def _print_report(report: object) -> None:
     print(f"  robot errors: {r.robot_errors or 'none'}")
 
 
-def run(args: argparse.Namespace) -> int:
-    """Connect and run ``args.command``; returns the exit status."""
+def _check_args(args: argparse.Namespace) -> None:
+    """One-line errors before anything connects (a run must not end unable to save its log)."""
     if not args.seconds > 0:
         raise ImpactError(f"invalid --seconds {args.seconds!r}; valid: > 0")
+    if not 0.0 <= args.max_payload_kg <= 20.0:
+        raise ImpactError(f"invalid --max-payload-kg {args.max_payload_kg!r}; valid: 0 to 20")
     out = getattr(args, "out", None)
-    if out is not None:  # before the robot moves: a run must not end unable to save its log
+    if out is not None:
         try:
             out.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise ImpactError(f"invalid --out {out}: {exc.strerror}; valid: a writable "
                               "directory") from None
+
+
+def _connect(args: argparse.Namespace) -> tuple[object, object]:
+    """(pylibfranka module, Robot) with no errors pending (recovered on ``--recover``)."""
     try:
         import pylibfranka as plf
     except ImportError:
         raise ImpactError("impact-robot needs pylibfranka: pip install -e '.[franka]'") from None
-
-    from impact_envs.control.controller import ImpactController
-    from impact_envs.robot.dynamics import PinocchioArm
-    from impact_franka.fci import fr3_config
-    from impact_franka.runner import hold
-
     config = (plf.RealtimeConfig.kEnforce if args.realtime == "enforce"
               else plf.RealtimeConfig.kIgnore)
     try:
@@ -81,14 +96,54 @@ def run(args: argparse.Namespace) -> int:
     state = robot.read_once()
     print(f"impact-robot: {args.host}: mode {state.robot_mode}, errors "
           f"{state.current_errors or 'none'}")
-    mode = getattr(args, "controller", "impedance")
-    controller = ImpactController(PinocchioArm(), fr3_config(), mode=mode)
+    if state.current_errors:
+        if not args.recover:
+            raise ImpactError(f"the robot reports errors {state.current_errors}; valid: clear "
+                              "them, or --recover (libfranka's automatic error recovery)")
+        robot.automatic_error_recovery()
+        print(f"  recovered: errors now {robot.read_once().current_errors or 'none'}")
+    return plf, robot
+
+
+def _controller(args: argparse.Namespace, robot: object) -> tuple[object, dict]:
+    """The controller for ``args`` and what was set up: collision thresholds, model check."""
+    from impact_envs.control.controller import ImpactController
+    from impact_envs.control.presets import preset_config
+    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_franka.collision import collision_thresholds
+    from impact_franka.fci import fr3_config
+    from impact_franka.model import FrankaModelArm, compare_models
+
+    state, ours = robot.read_once(), PinocchioArm()
+    franka_model = robot.load_model()
+    agreement = compare_models(franka_model, state, ours)
+    print(f"  {agreement.line()}")
+    thresholds = collision_thresholds(args.max_payload_kg, ours.jacobian)
+    thresholds.apply(robot)
+    print(f"  collision thresholds for an undeclared {args.max_payload_kg:g} kg: joints "
+          f"{list(thresholds.torque_nm)} Nm, Cartesian {list(thresholds.force)}")
+    dynamics = (FrankaModelArm(franka_model, state, PinocchioArm())
+                if getattr(args, "model", "pinocchio") == "franka" else ours)
+    config = fr3_config(preset_config(getattr(args, "preset", "default")))
+    controller = ImpactController(dynamics, config, mode=getattr(args, "controller",
+                                                                 "impedance"))
+    return controller, {"model_agreement": agreement._asdict(),
+                        "collision_thresholds": thresholds._asdict()}
+
+
+def run(args: argparse.Namespace) -> int:
+    """Connect and run ``args.command``; returns the exit status."""
+    from impact_franka.runner import hold
+
+    _check_args(args)
+    _, robot = _connect(args)
+    controller, setup = _controller(args, robot)
     report = hold(robot, controller, args.seconds, float_only=args.command == "check")
     _print_report(report)
     if report.stopped_by_signal:
         print("  stopped early on SIGINT/SIGTERM (ramped out, then finished the motion)")
     if getattr(args, "out", None) is not None:
-        _write_outputs(args, report)
+        _write_outputs(args, report, setup)
     if report.stop_reason == "budget":
         print("impact-robot: stopped: controller compute over the per-tick budget on consecutive "
               "ticks (ramped out)", file=sys.stderr)
@@ -96,18 +151,22 @@ def run(args: argparse.Namespace) -> int:
     return 0 if not report.robot_errors else 1
 
 
-def _write_outputs(args: argparse.Namespace, report: object) -> None:
-    """``DIR/ticks.csv`` and ``DIR/run.json`` (versions, arguments, what the loop measured)."""
+def _write_outputs(args: argparse.Namespace, report: object, setup: dict) -> None:
+    """``DIR/ticks.csv``, ``DIR/run.json`` (versions, arguments, setup, what the loop
+    measured) and ``DIR/protocol.png``/``.pdf`` (impact-protocol's figure)."""
     from impact_eval.runinfo import host_info, package_versions, utc_now
+    from impact_franka.figures import plot_ticks
 
     out: Path = args.out
     report.ticks_table.to_csv(out / "ticks.csv", index=False, float_format="%.9g")
     summary = {k: v for k, v in vars(report).items() if k != "ticks_table"}
     run = {"command": "impact-robot " + " ".join(sys.argv[1:]), "utc": utc_now(),
            "arguments": {k: str(v) for k, v in vars(args).items()},
-           "versions": package_versions(), "host": host_info(), "report": summary}
+           "versions": package_versions(), "host": host_info(), **setup, "report": summary}
     (out / "run.json").write_text(json.dumps(run, indent=2) + "\n")
-    print(f"  wrote {out / 'ticks.csv'} and {out / 'run.json'}")
+    figures = plot_ticks(report.ticks_table, getattr(args, "controller", "impedance"), out)
+    print(f"  wrote {out / 'ticks.csv'}, {out / 'run.json'} and "
+          f"{', '.join(p.name for p in figures)}")
 
 
 def main(argv: list[str] | None = None) -> int:

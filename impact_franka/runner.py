@@ -30,8 +30,9 @@ from impact_franka.fci import FrankaError, reading, torque_command
 
 WARM_TICKS = 200
 """``compute`` calls before the loop (numba compilation and the learner's first step)."""
-TICK_COLUMNS = ("t_s", "pos_error_m", "wrench_ext_z_n", "wrench_slow_z_n", "wrench_pred_z_n",
-                "gate_open", "guard_holding", "tick_compute_s")
+TICK_COLUMNS = ("t_s", "pos_error_m", "pos_error_z_m", "wrench_ext_z_n", "wrench_slow_z_n",
+                "wrench_pred_z_n", "wrench_imp_z_n", "wrench_ff_z_n", "gate_open",
+                "guard_holding", "tick_compute_s")
 """Columns of ``LoopReport.ticks_table`` (``ticks.csv``), one row per control tick."""
 RAMP_S = 0.3
 """Torque ramp-in at the start and ramp-out at every end (time, signal, budget) [s]."""
@@ -161,9 +162,11 @@ def hold(robot: object, controller: ImpactController, seconds: float,
                 scale = _ramp(now, end, ramp_s)
                 limit_rate_libfranka_kernel(cmd * scale, sent.copy(),
                                             LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S, sent)
-                rows.append((now, sig.pos_error_norm_m, sig.wrench_ext_world[2],
-                             sig.wrench_slow_world[2], sig.wrench_pred_world[2],
-                             int(sig.gate_open), int(controller.guard.holding), cost))
+                rows.append((now, sig.pos_error_norm_m, sig.pose_error[2],
+                             sig.wrench_ext_world[2], sig.wrench_slow_world[2],
+                             sig.wrench_pred_world[2], sig.wrench_imp_world[2],
+                             sig.wrench_ff_world[2], int(sig.gate_open),
+                             int(controller.guard.holding), cost))
                 done = end is not None and scale == 0.0 and not np.any(sent)
                 torques = plf.Torques(sent.tolist())
                 torques.motion_finished = done

@@ -17,6 +17,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from impact_envs.errors import ImpactError
 from impact_franka.fci import (
     FrankaError,
     fr3_config,
@@ -91,12 +92,90 @@ def franky_sim():
             proc.wait()
 
 
+def test_collision_thresholds_leave_room_for_the_undeclared_payload() -> None:
+    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_envs.robot.ik import HOME_Q
+    from impact_franka.collision import EXAMPLE_FORCE, EXAMPLE_TORQUE_NM, collision_thresholds
+
+    arm = PinocchioArm()
+    arm.update(HOME_Q, np.zeros(7))
+    none = collision_thresholds(0.0, arm.jacobian)
+    assert none.torque_nm == EXAMPLE_TORQUE_NM and none.force == EXAMPLE_FORCE
+    five = collision_thresholds(5.0, arm.jacobian)
+    assert five.force[2] == pytest.approx(20.0 + 1.5 * 5.0 * 9.81, abs=1e-3)
+    # what 5 kg reads on the joints at this pose: the same torque the arm needs to hold it
+    held = np.abs(arm.jacobian.T @ np.array([0.0, 0.0, -5.0 * 9.81, 0.0, 0.0, 0.0]))
+    np.testing.assert_allclose(np.subtract(five.torque_nm, EXAMPLE_TORQUE_NM), 1.5 * held,
+                               atol=2e-3)
+    assert held[1] > 10.0  # the shoulder feels it: the examples' 20 Nm alone would trip
+    with pytest.raises(ImpactError, match="valid: a finite number >= 0"):
+        collision_thresholds(-1.0, arm.jacobian)
+
+
 def test_check_floats_the_arm_and_reports_the_loop(franky_sim, capsys) -> None:
     from impact_franka.cli import main
 
-    assert main(["check", "--host", franky_sim, "--seconds", "1"]) == 0
+    assert main(["check", "--host", franky_sim, "--seconds", "1", "--max-payload-kg", "3"]) == 0
     out = capsys.readouterr().out
     assert "robot errors: none" in out and "Hz" in out
+    assert "collision thresholds for an undeclared 3 kg" in out
+
+
+def test_our_model_agrees_with_franka_s(franky_sim) -> None:
+    """Franka's Model (libfranka builds it from the URDF the server sends) against ours at the
+    simulator's start pose: the TCP Jacobians agree; both gravity torques explain the measured
+    tau_J at rest to within 0.2 Nm (ours models the hand's inertia a little differently)."""
+    import pylibfranka as plf
+
+    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_franka.model import compare_models
+
+    robot = plf.Robot(franky_sim, plf.RealtimeConfig.kIgnore)
+    agreement = compare_models(robot.load_model(), robot.read_once(), PinocchioArm())
+    assert agreement.jacobian < 1e-6
+    assert agreement.franka_vs_tau_j_nm < 0.05 and agreement.ours_vs_tau_j_nm < 0.2
+    assert agreement.gravity_nm < 0.2
+
+
+def test_hold_with_franka_s_model_keeps_the_tcp(franky_sim, tmp_path) -> None:
+    from impact_franka.cli import main
+
+    assert main(["hold", "--host", franky_sim, "--seconds", "1.5", "--model", "franka",
+                 "--out", str(tmp_path)]) == 0
+    import json
+
+    run = json.loads((tmp_path / "run.json").read_text())
+    assert run["report"]["pos_error_final_m"] < 2e-3 and run["report"]["robot_errors"] == ""
+    assert (tmp_path / "protocol.png").stat().st_size > 10_000
+
+
+def test_pending_robot_errors_refuse_unless_recover(monkeypatch, capsys) -> None:
+    """The robot reports an error from an earlier run: impact-robot refuses with one line, and
+    with --recover it calls libfranka's automatic error recovery first."""
+    plf = pytest.importorskip("pylibfranka")
+    from impact_franka import cli
+
+    calls = []
+
+    class _Robot:
+        def __init__(self, host: str, config: object) -> None:
+            self.errors = "[joint_reflex]"
+
+        def read_once(self) -> SimpleNamespace:
+            return SimpleNamespace(robot_mode="Reflex", current_errors=self.errors)
+
+        def automatic_error_recovery(self) -> None:
+            calls.append("recover")
+            self.errors = ""
+
+    monkeypatch.setattr(plf, "Robot", _Robot)
+    args = cli._parser().parse_args(["check", "--host", "127.0.0.1"])
+    with pytest.raises(ImpactError, match=r"reports errors \[joint_reflex\]; valid: .*--recover"):
+        cli._connect(args)
+    assert not calls
+    args = cli._parser().parse_args(["check", "--host", "127.0.0.1", "--recover"])
+    cli._connect(args)
+    assert calls == ["recover"] and "recovered: errors now none" in capsys.readouterr().out
 
 
 def test_hold_keeps_the_tcp_with_the_fr3_configuration(franky_sim) -> None:
@@ -138,6 +217,7 @@ def test_hold_writes_one_row_per_tick_and_run_json(franky_sim, tmp_path) -> None
     run = json.loads((tmp_path / "run.json").read_text())
     assert tuple(ticks.columns) == TICK_COLUMNS
     assert len(ticks) == run["report"]["ticks"] > 300
+    assert run["collision_thresholds"]["max_payload_kg"] == 0.0 and run["model_agreement"]
     assert ticks["t_s"].is_monotonic_increasing and ticks["pos_error_m"].max() < 2e-3
     assert run["report"]["robot_errors"] == "" and run["versions"]
 
