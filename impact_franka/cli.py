@@ -60,8 +60,10 @@ def _print_report(report: object) -> None:
     print(f"  loop: {r.ticks} ticks in {r.seconds:.2f} s ({r.rate_hz:.0f} Hz); compute p50 "
           f"{r.compute_p50_us:.0f} us, p99.9 {r.compute_p999_us:.0f} us, max "
           f"{r.compute_max_us:.0f} us")
-    print(f"  position error: final {1e3 * r.pos_error_final_m:.2f} mm, max "
-          f"{1e3 * r.pos_error_max_m:.2f} mm; our TCP vs O_T_EE {1e3 * r.tcp_vs_robot_m:.2f} mm")
+    print(f"  position error: end of hold {1e3 * r.pos_error_final_m:.2f} mm, max "
+          f"{1e3 * r.pos_error_max_m:.2f} mm, after the ramp-out "
+          f"{1e3 * r.pos_error_after_ramp_m:.2f} mm; our TCP vs O_T_EE "
+          f"{1e3 * r.tcp_vs_robot_m:.2f} mm")
     print(f"  robot errors: {r.robot_errors or 'none'}")
 
 

@@ -70,7 +70,12 @@ class LoopReport:
         ticks: Control cycles answered.
         seconds: Wall time of the loop [s].
         compute_p50_us / compute_p999_us / compute_max_us: ``compute`` time per tick [us].
-        pos_error_final_m / pos_error_max_m: TCP position error at the end / largest [m].
+        pos_error_final_m: TCP position error on the last tick of the hold, before the
+            ramp-out [m].
+        pos_error_max_m: Largest TCP position error of the hold, ramp-out excluded [m].
+        pos_error_after_ramp_m: TCP position error on the very last tick [m]: the ramp-out
+            hands the arm to the robot's own gravity compensation, which does not know an
+            undeclared load, so a held payload sags during it.
         tcp_vs_robot_m: Our TCP (Pinocchio, from ``q``) minus the robot's ``O_T_EE`` at the
             start [m] (frames reconciled: ~0 when Desk's end effector is the Franka Hand).
         robot_errors: The robot's error flags after the loop ("" if none).
@@ -86,6 +91,7 @@ class LoopReport:
     compute_max_us: float
     pos_error_final_m: float
     pos_error_max_m: float
+    pos_error_after_ramp_m: float
     tcp_vs_robot_m: float
     robot_errors: str
     stop_reason: str = ""
@@ -139,7 +145,7 @@ def hold(robot: object, controller: ImpactController, seconds: float,
     pos, quat = arm.pos_ee_world.copy(), matrix_to_quat(arm.rot_ee_world)
     _warm(controller, first.q, first.tau_measured, pos, quat)
     rows: list[tuple] = []
-    sent, reason, end, strikes = np.zeros(7), "", None, 0
+    sent, reason, end, strikes, held = np.zeros(7), "", None, 0, 0
     active = robot.start_torque_control()  # type: ignore[attr-defined]
     start = time.perf_counter()
     sig = controller.signals
@@ -156,7 +162,7 @@ def hold(robot: object, controller: ImpactController, seconds: float,
                 strikes = strikes + 1 if cost > budget_s else 0
                 if end is None and (now >= seconds or stop.requested or
                                     strikes >= BUDGET_STRIKES):
-                    end = now
+                    end, held = now, len(rows)
                     reason = ("signal" if stop.requested else
                               "budget" if strikes >= BUDGET_STRIKES else "")
                 scale = _ramp(now, end, ramp_s)
@@ -178,19 +184,21 @@ def hold(robot: object, controller: ImpactController, seconds: float,
         msg = " ".join(str(exc).split())
         raise FrankaError(f"the robot stopped the motion: {msg}; errors: {flags}") from None
     return _report(pd.DataFrame(rows, columns=TICK_COLUMNS), time.perf_counter() - start,
-                   float(np.linalg.norm(pos - first.pos_ee)), robot, reason)
+                   float(np.linalg.norm(pos - first.pos_ee)), robot, reason, max(held, 1))
 
 
 def _report(table: pd.DataFrame, elapsed: float, tcp_vs_robot_m: float, robot: object,
-            reason: str) -> LoopReport:
-    """The ``LoopReport`` of a finished loop's tick log (reads the robot's error flags)."""
+            reason: str, held: int) -> LoopReport:
+    """The ``LoopReport`` of a finished loop's tick log (reads the robot's error flags);
+    its first ``held`` rows are the hold, the rest the ramp-out."""
     cost_us = table["tick_compute_s"].to_numpy() * 1e6
     errors = table["pos_error_m"].to_numpy()
     flags = robot.read_once().current_errors  # type: ignore[attr-defined]
     return LoopReport(
         ticks=len(table), seconds=elapsed, compute_p50_us=float(np.percentile(cost_us, 50)),
         compute_p999_us=float(np.percentile(cost_us, 99.9)),
-        compute_max_us=float(cost_us.max()), pos_error_final_m=float(errors[-1]),
-        pos_error_max_m=float(errors.max()), tcp_vs_robot_m=tcp_vs_robot_m,
+        compute_max_us=float(cost_us.max()), pos_error_final_m=float(errors[held - 1]),
+        pos_error_max_m=float(errors[:held].max()), pos_error_after_ramp_m=float(errors[-1]),
+        tcp_vs_robot_m=tcp_vs_robot_m,
         robot_errors="" if not bool(flags) else str(flags), stop_reason=reason,
         ticks_table=table)

@@ -7,11 +7,13 @@ server binds 127.0.0.1:1337 only and is started and stopped by PID.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import socket
 import subprocess
 import time
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -67,20 +69,19 @@ def _port_open(port: int) -> bool:
         return s.connect_ex(("127.0.0.1", port)) == 0
 
 
-@pytest.fixture()
-def franky_sim():
-    """franky-sim serving on 127.0.0.1:1337 for one test (a fresh arm pose each time)."""
-    python = _simulator_python()
+@contextlib.contextmanager
+def _serving(argv: list[str]):
+    """A libfranka-protocol server (``argv``, franky-sim's python) on 127.0.0.1:1337, stopped
+    by PID (its process group) afterwards."""
     if _port_open(1337):
         pytest.fail("127.0.0.1:1337 is taken: another robot server is running")
-    proc = subprocess.Popen([python, "-m", "franky_sim.run_server", "-s", "mujoco",
-                             "--hostname", "127.0.0.1"], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
     try:
         deadline = time.monotonic() + 60.0
         while not _port_open(1337):
             if proc.poll() is not None or time.monotonic() > deadline:
-                pytest.fail("franky-sim did not start serving on 127.0.0.1:1337")
+                pytest.fail(f"{argv[1:]} did not start serving on 127.0.0.1:1337")
             time.sleep(0.2)
         yield "127.0.0.1"
     finally:
@@ -90,6 +91,15 @@ def franky_sim():
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
+
+
+@pytest.fixture()
+def franky_sim():
+    """franky-sim serving on 127.0.0.1:1337 for one test (a fresh arm pose each time)."""
+    python = _simulator_python()
+    with _serving([python, "-m", "franky_sim.run_server", "-s", "mujoco", "--hostname",
+                   "127.0.0.1"]) as host:
+        yield host
 
 
 def test_collision_thresholds_leave_room_for_the_undeclared_payload() -> None:
@@ -280,3 +290,33 @@ def test_unwritable_out_is_refused_before_connecting(tmp_path, capsys) -> None:
     err = capsys.readouterr().err
     assert err.startswith("impact-robot: invalid --out") and err.count("\n") == 1
     assert blocker.read_text() == "keep me"
+
+
+def test_an_undeclared_payload_handed_over_during_a_hold_is_learned(tmp_path) -> None:
+    """The paper's hold protocol against franky-sim: 3 kg the robot was not told about
+    arrives at the hand during a 12 s hold (tests/franky_payload_server.py). Impedance alone
+    would sag m g / K = 74 mm; IMPACT learns the weight and holds."""
+    import threading
+
+    import pandas as pd
+
+    from impact_franka.cli import main
+
+    flag = tmp_path / "payload_on"
+    server = [_simulator_python(), str(Path(__file__).with_name("franky_payload_server.py")),
+              "3.0", str(flag)]
+    with _serving(server) as host:
+        timer = threading.Timer(6.0, flag.touch)  # after the imports and warm-up: in the hold
+        timer.start()
+        try:
+            assert main(["hold", "--host", host, "--seconds", "12", "--max-payload-kg", "3",
+                         "--out", str(tmp_path / "run")]) == 0
+        finally:
+            timer.cancel()
+    ticks = pd.read_csv(tmp_path / "run" / "ticks.csv")
+    hold = ticks[ticks["t_s"] <= 12.0]
+    on = hold.index[hold["wrench_ext_z_n"].abs() > 10.0]
+    assert len(on) and hold["t_s"][on[0]] > 0.5  # the load arrived during the hold
+    assert hold["pos_error_m"].max() > 0.01  # and pulled the hand down first
+    assert hold["pos_error_m"].iloc[-1] < 1e-2  # then it was learned (measured 1.6-3.9 mm)
+    assert hold["wrench_pred_z_n"].iloc[-1] == pytest.approx(3.0 * 9.81, abs=6.0)
