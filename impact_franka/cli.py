@@ -24,6 +24,7 @@ from pathlib import Path
 
 from impact_envs.control.presets import PRESETS
 from impact_envs.errors import ImpactError
+from impact_franka.fci import TORQUE_SOURCES
 
 CONTROLLERS = ("impact", "impedance")
 REALTIME = ("ignore", "enforce")
@@ -42,6 +43,9 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--max-payload-kg", type=float, default=0.0,
                        help="largest load handed over without set_load; raises the collision "
                        "thresholds by 1.5x what it reads (docs/franka.md)")
+        p.add_argument("--torque-source", choices=TORQUE_SOURCES, default="tau_J",
+                       help="measured joint torque: tau_J (an FR3) or tau_J+g (a simulator "
+                       "whose tau_J leaves gravity out, e.g. franka-sim)")
         p.add_argument("--recover", action="store_true",
                        help="call automatic_error_recovery if the robot reports errors")
         if name == "hold":
@@ -140,7 +144,8 @@ def run(args: argparse.Namespace) -> int:
     _check_args(args)
     _, robot = _connect(args)
     controller, setup = _controller(args, robot)
-    report = hold(robot, controller, args.seconds, float_only=args.command == "check")
+    report = hold(robot, controller, args.seconds, float_only=args.command == "check",
+                  torque_source=args.torque_source)
     _print_report(report)
     if report.stopped_by_signal:
         print("  stopped early on SIGINT/SIGTERM (ramped out, then finished the motion)")

@@ -16,7 +16,18 @@ from typing import NamedTuple
 import numpy as np
 
 from impact_envs.control.config import ControllerConfig, libfranka_limits
-from impact_envs.errors import ImpactError
+from impact_envs.errors import ImpactError, check_choice
+
+TORQUE_SOURCES: tuple[str, ...] = ("tau_J", "tau_J+g")
+"""What the controller reads as the measured joint torque: ``tau_J`` (an FR3: link-side,
+gravity included) or ``tau_J+g`` (a simulator whose ``tau_J`` echoes the command, i.e. leaves
+gravity out, as franka-sim 1.1.7 does: our g(q) of the previous tick, 1 ms old, is added)."""
+
+
+def check_torque_source(source: str) -> bool:
+    """Validate ``source`` (one of ``TORQUE_SOURCES``); True if g(q) must be added."""
+    check_choice("torque source", source, TORQUE_SOURCES)
+    return source == "tau_J+g"
 
 
 class FrankaError(ImpactError):

@@ -26,7 +26,7 @@ from impact_envs.control.limits import (
     LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S,
     limit_rate_libfranka_kernel,
 )
-from impact_franka.fci import FrankaError, reading, torque_command
+from impact_franka.fci import FrankaError, check_torque_source, reading, torque_command
 
 WARM_TICKS = 200
 """``compute`` calls before the loop (numba compilation and the learner's first step)."""
@@ -126,19 +126,21 @@ def _ramp(now: float, end: float | None, ramp_s: float) -> float:
 
 def hold(robot: object, controller: ImpactController, seconds: float,
          float_only: bool = False, budget_s: float = BUDGET_S,
-         ramp_s: float = RAMP_S) -> LoopReport:
+         ramp_s: float = RAMP_S, torque_source: str = "tau_J") -> LoopReport:
     """Hold the current TCP pose for ``seconds`` (or float: zero torques) on ``robot``
     (a ``pylibfranka.Robot``); returns what the loop measured.
 
     The command is ramped in over ``ramp_s`` and out over ``ramp_s`` at every end, then
     rate-limited against the previous command exactly as libfranka's ``limitRate`` (the
-    ramp must not add a step the robot refuses).
+    ramp must not add a step the robot refuses). ``torque_source`` (``fci.TORQUE_SOURCES``)
+    says what the controller reads as the measured joint torque.
 
     Raises:
         FrankaError: The robot stopped the motion (its error flags in the message).
     """
     import pylibfranka as plf
 
+    add_gravity = check_torque_source(torque_source)
     first = reading(robot.read_once())  # type: ignore[attr-defined]
     arm = controller.dynamics
     arm.update(first.q, np.zeros(7))
@@ -155,7 +157,8 @@ def hold(robot: object, controller: ImpactController, seconds: float,
                 state, _ = active.readOnce()
                 r = reading(state)
                 t0 = time.perf_counter_ns()
-                tau = controller.compute(r.q, r.dq, r.tau_measured, pos, quat)
+                tau_meas = r.tau_measured + arm.gravity if add_gravity else r.tau_measured
+                tau = controller.compute(r.q, r.dq, tau_meas, pos, quat)
                 cmd = np.zeros(7) if float_only else torque_command(tau, arm.gravity)
                 cost = (time.perf_counter_ns() - t0) * 1e-9
                 now = time.perf_counter() - start

@@ -55,10 +55,10 @@ def test_fr3_config_is_libfranka_limits_bounded_tick_and_guard() -> None:
     assert cfg.internal_model.learner == "numba" and cfg.guard.enabled
 
 
-def _simulator_python() -> str:
-    path = os.environ.get("IMPACT_FRANKY_SIM_PYTHON", "")
+def _simulator_python(variable: str = "IMPACT_FRANKY_SIM_PYTHON") -> str:
+    path = os.environ.get(variable, "")
     if not path or not os.path.exists(path):
-        pytest.skip("franky-sim not given (IMPACT_FRANKY_SIM_PYTHON); .ci/run sets it")
+        pytest.skip(f"simulator not given ({variable}); .ci/run sets it")
     pytest.importorskip("pylibfranka")
     return path
 
@@ -100,6 +100,53 @@ def franky_sim():
     with _serving([python, "-m", "franky_sim.run_server", "-s", "mujoco", "--hostname",
                    "127.0.0.1"]) as host:
         yield host
+
+
+@pytest.fixture()
+def franka_sim():
+    """franka-sim 1.1.7 on 127.0.0.1:1337 with its communication-constraint and motion-limit
+    checks on (tests/franka_sim_server.py), for one test."""
+    python = _simulator_python("IMPACT_FRANKA_SIM_PYTHON")
+    with _serving([python, str(Path(__file__).with_name("franka_sim_server.py"))]) as host:
+        yield host
+
+
+def _raw_torque_steps(host: str, step_nm: float) -> str:
+    """Raise joint 7's torque by ``step_nm`` per 1 ms cycle for 4 cycles and back, bypassing
+    every limiter; the robot's error, or "" if none."""
+    import pylibfranka as plf
+
+    robot = plf.Robot(host, plf.RealtimeConfig.kIgnore)
+    active, tau = robot.start_torque_control(), [0.0] * 7
+    try:
+        for i in range(8):
+            active.readOnce()
+            tau[6] += step_nm if i < 4 else -step_nm
+            command = plf.Torques(list(tau))
+            command.motion_finished = i == 7
+            active.writeOnce(command)
+    except plf.ControlException as exc:
+        return str(exc)
+    return ""
+
+
+def test_franka_sim_enforces_the_torque_rate_the_runner_keeps(franka_sim) -> None:
+    """Negative control: franka-sim's reflex trips on a rate 1e-7 Nm per cycle above 1000 Nm/s
+    and not on libfranka's 999.999 Nm/s, so a run without a reflex below means something."""
+    assert "controller_torque_discontinuity" in _raw_torque_steps(franka_sim, 1.0000001)
+    assert _raw_torque_steps(franka_sim, 0.999999) == ""
+
+
+def test_franka_sim_hold_with_the_robot_s_checks_on(franka_sim, capsys) -> None:
+    """IMPACT holds under franka-sim's communication and motion-limit checks with no reflex
+    (its tau_J echoes the command, without gravity: --torque-source tau_J+g)."""
+    from impact_franka.cli import main
+
+    assert main(["check", "--host", franka_sim, "--seconds", "1"]) == 0
+    assert main(["hold", "--host", franka_sim, "--seconds", "3", "--torque-source",
+                 "tau_J+g"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("robot errors: none") == 2
 
 
 def test_collision_thresholds_leave_room_for_the_undeclared_payload() -> None:

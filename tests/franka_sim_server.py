@@ -1,0 +1,33 @@
+"""franka-sim 1.1.7 on 127.0.0.1:1337 with the real robot's checks on, for tests/test_franka.py.
+
+Run with franka-sim's own python (it pins numpy 1.26 and MuJoCo < 3.3: a virtualenv of its
+own, ``IMPACT_FRANKA_SIM_PYTHON``). Its command-line server binds 0.0.0.0; this script binds
+loopback only, offline, on this project's FR3 + hand model (``FR3_MJCF``, no gripper
+server), with ``enforce_comm_constraints`` and ``enforce_motion_limits`` (missed cycles and
+torque-rate or limit violations abort the motion, as on the robot). SIGTERM stops it.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+from pathlib import Path
+
+ASSET = Path(__file__).resolve().parent.parent / "impact_envs" / "assets" / "fr3_hand.xml"
+
+
+def main() -> None:
+    os.environ.setdefault("FR3_MJCF", str(ASSET))
+    from franka_sim.franka_sim_server import FrankaSimServer
+
+    server = FrankaSimServer(host="127.0.0.1", enable_gripper=False,
+                             enforce_comm_constraints=True, enforce_motion_limits=True)
+    signal.signal(signal.SIGTERM, lambda *_: server.stop())
+    signal.signal(signal.SIGINT, lambda *_: server.stop())
+    server.start()
+    sys.exit(0)
+
+
+if __name__ == "__main__":
+    main()
