@@ -151,6 +151,10 @@ def run(args: argparse.Namespace) -> int:
         print("  stopped early on SIGINT/SIGTERM (ramped out, then finished the motion)")
     if getattr(args, "out", None) is not None:
         _write_outputs(args, report, setup)
+    if report.stop_reason == "reflex":
+        print(f"impact-robot: the robot stopped the motion: {report.robot_message}; errors: "
+              f"{report.robot_errors or 'none'}", file=sys.stderr)
+        return 1
     if report.stop_reason == "budget":
         print("impact-robot: stopped: controller compute over the per-tick budget on consecutive "
               "ticks (ramped out)", file=sys.stderr)

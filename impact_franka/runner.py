@@ -15,7 +15,7 @@ import math
 import signal
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -26,7 +26,7 @@ from impact_envs.control.limits import (
     LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S,
     limit_rate_libfranka_kernel,
 )
-from impact_franka.fci import FrankaError, check_torque_source, reading, torque_command
+from impact_franka.fci import check_torque_source, reading, torque_command
 
 WARM_TICKS = 200
 """``compute`` calls before the loop (numba compilation and the learner's first step)."""
@@ -79,8 +79,10 @@ class LoopReport:
         tcp_vs_robot_m: Our TCP (Pinocchio, from ``q``) minus the robot's ``O_T_EE`` at the
             start [m] (frames reconciled: ~0 when Desk's end effector is the Franka Hand).
         robot_errors: The robot's error flags after the loop ("" if none).
-        stop_reason: "" (ran its time), "signal" (SIGINT / SIGTERM) or "budget" (compute over
-            the per-tick budget on ``BUDGET_STRIKES`` ticks in a row); every stop ramps out.
+        stop_reason: "" (ran its time), "signal" (SIGINT / SIGTERM), "budget" (compute over
+            the per-tick budget on ``BUDGET_STRIKES`` ticks in a row; these three ramp out)
+            or "reflex" (the robot stopped the motion itself).
+        robot_message: With "reflex", libfranka's message (it names the reflex).
         ticks_table: One row per tick, ``TICK_COLUMNS``.
     """
 
@@ -95,6 +97,7 @@ class LoopReport:
     tcp_vs_robot_m: float
     robot_errors: str
     stop_reason: str = ""
+    robot_message: str = ""
     ticks_table: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=TICK_COLUMNS))
 
     @property
@@ -135,8 +138,9 @@ def hold(robot: object, controller: ImpactController, seconds: float,
     ramp must not add a step the robot refuses). ``torque_source`` (``fci.TORQUE_SOURCES``)
     says what the controller reads as the measured joint torque.
 
-    Raises:
-        FrankaError: The robot stopped the motion (its error flags in the message).
+    A reflex (the robot stops the motion) ends the loop with ``stop_reason`` "reflex", the
+    robot's message in ``robot_message`` and its error flags in ``robot_errors``; the ticks
+    up to it are kept.
     """
     import pylibfranka as plf
 
@@ -147,7 +151,7 @@ def hold(robot: object, controller: ImpactController, seconds: float,
     pos, quat = arm.pos_ee_world.copy(), matrix_to_quat(arm.rot_ee_world)
     _warm(controller, first.q, first.tau_measured, pos, quat)
     rows: list[tuple] = []
-    sent, reason, end, strikes, held = np.zeros(7), "", None, 0, 0
+    sent, reason, end, strikes, held, message = np.zeros(7), "", None, 0, 0, ""
     active = robot.start_torque_control()  # type: ignore[attr-defined]
     start = time.perf_counter()
     sig = controller.signals
@@ -183,11 +187,11 @@ def hold(robot: object, controller: ImpactController, seconds: float,
                 if done:
                     break
     except (plf.ControlException, plf.NetworkException, plf.CommandException) as exc:
-        flags = str(robot.read_once().current_errors)  # type: ignore[attr-defined]
-        msg = " ".join(str(exc).split())
-        raise FrankaError(f"the robot stopped the motion: {msg}; errors: {flags}") from None
-    return _report(pd.DataFrame(rows, columns=TICK_COLUMNS), time.perf_counter() - start,
-                   float(np.linalg.norm(pos - first.pos_ee)), robot, reason, max(held, 1))
+        message, reason = " ".join(str(exc).split()), "reflex"
+        held = held if end is not None else len(rows)
+    report = _report(pd.DataFrame(rows, columns=TICK_COLUMNS), time.perf_counter() - start,
+                     float(np.linalg.norm(pos - first.pos_ee)), robot, reason, held)
+    return replace(report, robot_message=message)
 
 
 def _report(table: pd.DataFrame, elapsed: float, tcp_vs_robot_m: float, robot: object,
@@ -196,6 +200,9 @@ def _report(table: pd.DataFrame, elapsed: float, tcp_vs_robot_m: float, robot: o
     its first ``held`` rows are the hold, the rest the ramp-out."""
     cost_us = table["tick_compute_s"].to_numpy() * 1e6
     errors = table["pos_error_m"].to_numpy()
+    if not len(table):  # a reflex on the first cycle
+        cost_us, errors = np.full(1, math.nan), np.full(1, math.nan)
+    held = min(max(held, 1), len(errors))
     flags = robot.read_once().current_errors  # type: ignore[attr-defined]
     return LoopReport(
         ticks=len(table), seconds=elapsed, compute_p50_us=float(np.percentile(cost_us, 50)),

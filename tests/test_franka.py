@@ -367,3 +367,69 @@ def test_an_undeclared_payload_handed_over_during_a_hold_is_learned(tmp_path) ->
     assert hold["pos_error_m"].max() > 0.01  # and pulled the hand down first
     assert hold["pos_error_m"].iloc[-1] < 1e-2  # then it was learned (measured 1.6-3.9 mm)
     assert hold["wrench_pred_z_n"].iloc[-1] == pytest.approx(3.0 * 9.81, abs=6.0)
+
+
+class _FakeActive:
+    """An active torque control whose robot stops the motion (a reflex) on cycle ``fail``."""
+
+    def __init__(self, state: SimpleNamespace, fail: int) -> None:
+        self.state, self.fail, self.cycles = state, fail, 0
+
+    def readOnce(self) -> tuple:  # noqa: N802 (pylibfranka's name)
+        return self.state, 0.001
+
+    def writeOnce(self, torques: object) -> None:  # noqa: N802
+        import pylibfranka as plf
+
+        self.cycles += 1
+        if self.cycles == self.fail:
+            self.state.current_errors = "[joint_reflex]"
+            raise plf.ControlException('libfranka: Move command aborted: motion aborted by '
+                                       'reflex! ["joint_reflex"]')
+
+
+class _FakeRobot:
+    def __init__(self, fail: int) -> None:
+        from impact_envs.robot.dynamics import PinocchioArm
+        from impact_envs.robot.ik import HOME_Q
+
+        arm = PinocchioArm()
+        arm.update(HOME_Q, np.zeros(7))
+        pose = np.eye(4)
+        pose[:3, :3], pose[:3, 3] = arm.rot_ee_world, arm.pos_ee_world
+        self.state = SimpleNamespace(q=list(HOME_Q), dq=[0.0] * 7, tau_J=list(arm.gravity),
+                                     O_T_EE=pose.T.ravel().tolist(), current_errors="",
+                                     robot_mode="Move")
+        self.active = _FakeActive(self.state, fail)
+
+    def read_once(self) -> SimpleNamespace:
+        return self.state
+
+    def start_torque_control(self) -> _FakeActive:
+        return self.active
+
+
+def test_a_reflex_keeps_the_ticks_and_exits_1_naming_it(monkeypatch, tmp_path, capsys) -> None:
+    """The robot stops the motion on cycle 50: the loop ends, its 50 ticks (the last one's
+    command refused) are in ticks.csv, run.json has the robot's flags, and the CLI says which reflex in one line."""
+    pytest.importorskip("pylibfranka")
+    from impact_envs.control.controller import ImpactController
+    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_franka import cli
+
+    robot = _FakeRobot(fail=50)
+    monkeypatch.setattr(cli, "_connect", lambda args: (None, robot))
+    monkeypatch.setattr(cli, "_controller", lambda args, r: (
+        ImpactController(PinocchioArm(), fr3_config(), mode="impact"), {}))
+    out = tmp_path / "run"
+    assert cli.main(["hold", "--host", "127.0.0.1", "--seconds", "5", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and '["joint_reflex"]' in err and "errors: [joint_reflex]" in err
+    import json
+
+    import pandas as pd
+
+    assert len(pd.read_csv(out / "ticks.csv")) == 50
+    run = json.loads((out / "run.json").read_text())
+    assert run["report"]["stop_reason"] == "reflex"
+    assert run["report"]["robot_errors"] == "[joint_reflex]"
