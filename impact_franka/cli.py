@@ -173,11 +173,23 @@ def _write_outputs(args: argparse.Namespace, report: object, setup: dict) -> Non
     summary = {k: v for k, v in vars(report).items() if k != "ticks_table"}
     run = {"command": "impact-robot " + " ".join(sys.argv[1:]), "utc": utc_now(),
            "arguments": {k: str(v) for k, v in vars(args).items()},
-           "versions": package_versions(), "host": host_info(), **setup, "report": summary}
+           "versions": {**package_versions(), "pylibfranka": _version("pylibfranka")},
+           "robot_protocol": "libfranka's, as spoken by pylibfranka (it refuses a robot "
+                             "server of another version when it connects)",
+           "host": host_info(), **setup, "report": summary}
     (out / "run.json").write_text(json.dumps(run, indent=2) + "\n")
     figures = plot_ticks(report.ticks_table, getattr(args, "controller", "impedance"), out)
     print(f"  wrote {out / 'ticks.csv'}, {out / 'run.json'} and "
           f"{', '.join(p.name for p in figures)}")
+
+
+def _version(package: str) -> str | None:
+    from importlib import metadata
+
+    try:
+        return metadata.version(package)
+    except metadata.PackageNotFoundError:
+        return None
 
 
 def main(argv: list[str] | None = None) -> int:
