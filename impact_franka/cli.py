@@ -51,12 +51,28 @@ def _parser() -> argparse.ArgumentParser:
         if name == "hold":
             p.add_argument("--controller", choices=CONTROLLERS, default="impact")
             p.add_argument("--preset", choices=PRESETS, default="default")
+            p.add_argument("--step-m", type=_vector3, default=None, metavar="DX,DY,DZ",
+                           help="move the held target by this offset [m, base frame] once")
+            p.add_argument("--step-at-s", type=float, default=1.0,
+                           help="when the step happens [s into the hold]")
             p.add_argument("--model", choices=MODELS, default="pinocchio",
                            help="controller's dynamics: ours, or Franka's Model (its Jacobian, "
                            "inertia and gravity)")
             p.add_argument("--out", type=Path, default=None,
                            help="write DIR/ticks.csv (one row per tick) and DIR/run.json")
     return parser
+
+
+def _vector3(text: str) -> tuple[float, float, float]:
+    """``DX,DY,DZ`` [m], each within 0.1 m (a step, not a move)."""
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(abs(v) <= 0.1 for v in values):
+        raise argparse.ArgumentTypeError(f"invalid step {text!r}; valid: DX,DY,DZ in metres, "
+                                         "each within 0.1")
+    return values  # type: ignore[return-value]
 
 
 def _print_report(report: object) -> None:
@@ -68,7 +84,8 @@ def _print_report(report: object) -> None:
           f"{1e3 * r.pos_error_max_m:.2f} mm, after the ramp-out "
           f"{1e3 * r.pos_error_after_ramp_m:.2f} mm; our TCP vs O_T_EE "
           f"{1e3 * r.tcp_vs_robot_m:.2f} mm")
-    print(f"  robot errors: {r.robot_errors or 'none'}")
+    print(f"  robot errors: {r.robot_errors or 'none'}; command success rate, lowest "
+          f"{r.command_success_rate_min:.3f}")
 
 
 def _check_args(args: argparse.Namespace) -> None:
@@ -124,6 +141,8 @@ def _controller(args: argparse.Namespace, robot: object) -> tuple[object, dict]:
     franka_model = robot.load_model()
     agreement = compare_models(franka_model, state, ours)
     print(f"  {agreement.line()}")
+    for mismatch in agreement.mismatches():
+        print(f"  MODEL MISMATCH: {mismatch} (impact_franka.model.TOLERANCE; docs/franka.md)")
     thresholds = collision_thresholds(args.max_payload_kg, ours.jacobian)
     thresholds.apply(robot)
     print(f"  collision thresholds for an undeclared {args.max_payload_kg:g} kg: joints "
@@ -139,13 +158,17 @@ def _controller(args: argparse.Namespace, robot: object) -> tuple[object, dict]:
 
 def run(args: argparse.Namespace) -> int:
     """Connect and run ``args.command``; returns the exit status."""
-    from impact_franka.runner import hold
+    import numpy as np
+
+    from impact_franka.runner import TargetStep, hold
 
     _check_args(args)
+    step_m = getattr(args, "step_m", None)
+    step = None if step_m is None else TargetStep(np.array(step_m), args.step_at_s)
     _, robot = _connect(args)
     controller, setup = _controller(args, robot)
     report = hold(robot, controller, args.seconds, float_only=args.command == "check",
-                  torque_source=args.torque_source)
+                  torque_source=args.torque_source, step=step)
     _print_report(report)
     if report.stopped_by_signal:
         print("  stopped early on SIGINT/SIGTERM (ramped out, then finished the motion)")

@@ -22,6 +22,11 @@ from impact_envs.control.arm_model import ArmDynamics
 
 GRAVITY_EARTH = (0.0, 0.0, -9.81)
 """Gravity [m/s^2] in the robot's base frame, written to the state's ``O_ddP_O``."""
+TOLERANCE = {"jacobian": 1e-3, "gravity_nm": 1.0, "inertia_kgm2": 0.5}
+"""Largest differences accepted without a flag: Jacobian 1e-3 (1 mm of TCP motion per rad: the
+TCP frames agree), gravity 1 Nm (about 0.1 kg at arm's length; the internal model takes up
+the rest as a load), inertia 0.5 kg m^2 (rotor armature and the hand's inertia are modelled
+differently: 0.2 kg m^2 against franky-sim)."""
 
 
 class ModelAgreement(NamedTuple):
@@ -41,6 +46,11 @@ class ModelAgreement(NamedTuple):
     inertia_kgm2: float
     ours_vs_tau_j_nm: float
     franka_vs_tau_j_nm: float
+
+    def mismatches(self) -> list[str]:
+        """The quantities beyond ``TOLERANCE``, each as ``name difference > tolerance``."""
+        return [f"{name} {getattr(self, name):.3g} > {limit:g}"
+                for name, limit in TOLERANCE.items() if getattr(self, name) > limit]
 
     def line(self) -> str:
         """One line for ``impact-robot check``."""

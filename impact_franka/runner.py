@@ -16,6 +16,7 @@ import signal
 import threading
 import time
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -32,12 +33,21 @@ WARM_TICKS = 200
 """``compute`` calls before the loop (numba compilation and the learner's first step)."""
 TICK_COLUMNS = ("t_s", "pos_error_m", "pos_error_z_m", "wrench_ext_z_n", "wrench_slow_z_n",
                 "wrench_pred_z_n", "wrench_imp_z_n", "wrench_ff_z_n", "gate_open",
-                "guard_holding", "tick_compute_s")
+                "guard_holding", "command_success_rate", "tick_compute_s")
 """Columns of ``LoopReport.ticks_table`` (``ticks.csv``), one row per control tick."""
 RAMP_S = 0.3
 """Torque ramp-in at the start and ramp-out at every end (time, signal, budget) [s]."""
+SUCCESS_RATE_AFTER_S = 0.5
+"""The robot's command success rate is a share of its last 100 cycles: read after 0.5 s."""
 BUDGET_S, BUDGET_STRIKES = 0.8e-3, 3
 """Per-tick compute budget [s] and the consecutive ticks over it that stop the loop."""
+
+
+class TargetStep(NamedTuple):
+    """A step of the held TCP target: ``offset_m`` (3,) [m, world] from ``at_s`` [s] on."""
+
+    offset_m: np.ndarray
+    at_s: float
 
 
 class _StopRequest:
@@ -83,6 +93,9 @@ class LoopReport:
             the per-tick budget on ``BUDGET_STRIKES`` ticks in a row; these three ramp out)
             or "reflex" (the robot stopped the motion itself).
         robot_message: With "reflex", libfranka's message (it names the reflex).
+        command_success_rate_min: Lowest ``control_command_success_rate`` the robot reported
+            after ``SUCCESS_RATE_AFTER_S`` (the share of its last 100 cycles whose command
+            arrived in time).
         ticks_table: One row per tick, ``TICK_COLUMNS``.
     """
 
@@ -98,6 +111,7 @@ class LoopReport:
     robot_errors: str
     stop_reason: str = ""
     robot_message: str = ""
+    command_success_rate_min: float = math.nan
     ticks_table: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=TICK_COLUMNS))
 
     @property
@@ -129,14 +143,16 @@ def _ramp(now: float, end: float | None, ramp_s: float) -> float:
 
 def hold(robot: object, controller: ImpactController, seconds: float,
          float_only: bool = False, budget_s: float = BUDGET_S,
-         ramp_s: float = RAMP_S, torque_source: str = "tau_J") -> LoopReport:
+         ramp_s: float = RAMP_S, torque_source: str = "tau_J",
+         step: TargetStep | None = None) -> LoopReport:
     """Hold the current TCP pose for ``seconds`` (or float: zero torques) on ``robot``
     (a ``pylibfranka.Robot``); returns what the loop measured.
 
     The command is ramped in over ``ramp_s`` and out over ``ramp_s`` at every end, then
     rate-limited against the previous command exactly as libfranka's ``limitRate`` (the
     ramp must not add a step the robot refuses). ``torque_source`` (``fci.TORQUE_SOURCES``)
-    says what the controller reads as the measured joint torque.
+    says what the controller reads as the measured joint torque; ``step`` moves the held
+    target once during the hold.
 
     A reflex (the robot stops the motion) ends the loop with ``stop_reason`` "reflex", the
     robot's message in ``robot_message`` and its error flags in ``robot_errors``; the ticks
@@ -152,6 +168,7 @@ def hold(robot: object, controller: ImpactController, seconds: float,
     _warm(controller, first.q, first.tau_measured, pos, quat)
     rows: list[tuple] = []
     sent, reason, end, strikes, held, message = np.zeros(7), "", None, 0, 0, ""
+    now_prev, success = 0.0, 1.0
     active = robot.start_torque_control()  # type: ignore[attr-defined]
     start = time.perf_counter()
     sig = controller.signals
@@ -162,10 +179,14 @@ def hold(robot: object, controller: ImpactController, seconds: float,
                 r = reading(state)
                 t0 = time.perf_counter_ns()
                 tau_meas = r.tau_measured + arm.gravity if add_gravity else r.tau_measured
-                tau = controller.compute(r.q, r.dq, tau_meas, pos, quat)
+                target = pos if step is None or now_prev < step.at_s else pos + step.offset_m
+                tau = controller.compute(r.q, r.dq, tau_meas, target, quat)
                 cmd = np.zeros(7) if float_only else torque_command(tau, arm.gravity)
                 cost = (time.perf_counter_ns() - t0) * 1e-9
-                now = time.perf_counter() - start
+                now = now_prev = time.perf_counter() - start
+                rate = float(state.control_command_success_rate)
+                if now > SUCCESS_RATE_AFTER_S:
+                    success = min(success, rate)
                 strikes = strikes + 1 if cost > budget_s else 0
                 if end is None and (now >= seconds or stop.requested or
                                     strikes >= BUDGET_STRIKES):
@@ -179,7 +200,7 @@ def hold(robot: object, controller: ImpactController, seconds: float,
                              sig.wrench_ext_world[2], sig.wrench_slow_world[2],
                              sig.wrench_pred_world[2], sig.wrench_imp_world[2],
                              sig.wrench_ff_world[2], int(sig.gate_open),
-                             int(controller.guard.holding), cost))
+                             int(controller.guard.holding), rate, cost))
                 done = end is not None and scale == 0.0 and not np.any(sent)
                 torques = plf.Torques(sent.tolist())
                 torques.motion_finished = done
@@ -191,7 +212,7 @@ def hold(robot: object, controller: ImpactController, seconds: float,
         held = held if end is not None else len(rows)
     report = _report(pd.DataFrame(rows, columns=TICK_COLUMNS), time.perf_counter() - start,
                      float(np.linalg.norm(pos - first.pos_ee)), robot, reason, held)
-    return replace(report, robot_message=message)
+    return replace(report, robot_message=message, command_success_rate_min=success)
 
 
 def _report(table: pd.DataFrame, elapsed: float, tcp_vs_robot_m: float, robot: object,

@@ -143,10 +143,58 @@ def test_franka_sim_hold_with_the_robot_s_checks_on(franka_sim, capsys) -> None:
     from impact_franka.cli import main
 
     assert main(["check", "--host", franka_sim, "--seconds", "1"]) == 0
-    assert main(["hold", "--host", franka_sim, "--seconds", "3", "--torque-source",
-                 "tau_J+g"]) == 0
     out = capsys.readouterr().out
-    assert out.count("robot errors: none") == 2
+    # franka-sim's end effector is the flange (F_T_EE = identity), 0.21 m from our TCP
+    assert "robot errors: none" in out and "MODEL MISMATCH: jacobian" in out
+
+
+def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim, tmp_path,
+                                                               monkeypatch) -> None:
+    """Under franka-sim's communication and motion-limit checks: a 30 s hold with a 5 cm step
+    down at 10 s, then SIGINT at 20 s: no reflex, the robot's command success rate >= 0.95,
+    held within 1 mm before the step, a clean exit 0 with the ticks up to the stop. After the
+    step the TCP stops 5-10 mm short (impedance alone: 6.3 mm): the joints' Coulomb friction
+    of our FR3 model, which franka-sim simulates, holds it (docs/franka.md); bounded here at
+    12 mm."""
+    import threading
+
+    import pandas as pd
+
+    from impact_franka.cli import main
+
+    out = tmp_path / "run"
+
+    def arm_timer() -> None:  # SIGINT 20 s after the loop started (warm-up and imports first)
+        deadline = time.monotonic() + 120.0
+        while not (out / "started").exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(20.0)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Thread(target=arm_timer, daemon=True)
+    timer.start()
+    import impact_franka.runner as runner
+
+    original = runner.hold
+
+    def marked_hold(*args, **kwargs):
+        (out / "started").touch()
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(runner, "hold", marked_hold)
+    code = main(["hold", "--host", franka_sim, "--seconds", "30", "--torque-source", "tau_J+g",
+                 "--step-m", "0,0,-0.05", "--step-at-s", "10", "--out", str(out)])
+    assert code == 0
+    import json
+
+    run = json.loads((out / "run.json").read_text())["report"]
+    assert run["stop_reason"] == "signal" and run["robot_errors"] == ""
+    assert run["command_success_rate_min"] >= 0.95
+    ticks = pd.read_csv(out / "ticks.csv")
+    assert len(ticks) == run["ticks"] and 15.0 < ticks["t_s"].iloc[-1] < 25.0
+    before = ticks[(ticks["t_s"] > 1.0) & (ticks["t_s"] < 10.0)]
+    after = ticks[(ticks["t_s"] > 12.0) & (ticks["t_s"] < 18.0)]
+    assert before["pos_error_m"].max() <= 1e-3 and after["pos_error_m"].max() <= 12e-3
 
 
 def test_collision_thresholds_leave_room_for_the_undeclared_payload() -> None:
@@ -191,7 +239,7 @@ def test_our_model_agrees_with_franka_s(franky_sim) -> None:
     agreement = compare_models(robot.load_model(), robot.read_once(), PinocchioArm())
     assert agreement.jacobian < 1e-6
     assert agreement.franka_vs_tau_j_nm < 0.05 and agreement.ours_vs_tau_j_nm < 0.2
-    assert agreement.gravity_nm < 0.2
+    assert agreement.gravity_nm < 0.2 and agreement.mismatches() == []
 
 
 def test_hold_with_franka_s_model_keeps_the_tcp(franky_sim, tmp_path) -> None:
@@ -399,7 +447,7 @@ class _FakeRobot:
         pose[:3, :3], pose[:3, 3] = arm.rot_ee_world, arm.pos_ee_world
         self.state = SimpleNamespace(q=list(HOME_Q), dq=[0.0] * 7, tau_J=list(arm.gravity),
                                      O_T_EE=pose.T.ravel().tolist(), current_errors="",
-                                     robot_mode="Move")
+                                     robot_mode="Move", control_command_success_rate=1.0)
         self.active = _FakeActive(self.state, fail)
 
     def read_once(self) -> SimpleNamespace:
@@ -411,7 +459,8 @@ class _FakeRobot:
 
 def test_a_reflex_keeps_the_ticks_and_exits_1_naming_it(monkeypatch, tmp_path, capsys) -> None:
     """The robot stops the motion on cycle 50: the loop ends, its 50 ticks (the last one's
-    command refused) are in ticks.csv, run.json has the robot's flags, and the CLI says which reflex in one line."""
+    command refused) are in ticks.csv, run.json has the robot's flags, and the CLI says which
+    reflex in one line."""
     pytest.importorskip("pylibfranka")
     from impact_envs.control.controller import ImpactController
     from impact_envs.robot.dynamics import PinocchioArm
