@@ -54,6 +54,7 @@ from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
 from impact_envs.policies.scripted import PickPlaceExpert
+from impact_envs.rates import POLICY_HZ
 
 PHASES = ("A", "B", "C")
 MAX_TARGET_VZ_M_S = 0.02
@@ -82,7 +83,7 @@ def protocol_expert(env_id: str, hold_s: float) -> PickPlaceExpert:
                                    "valid: IMPACT/Dumbbell-v0, IMPACT/Hammer-v0")
     if hold_s < 0.0:
         raise InvalidArgumentError(f"--hold-s must be >= 0 [s], got {hold_s}")
-    expert.spec = replace(expert.spec, carry_dwell_steps=round(hold_s * 30))
+    expert.spec = replace(expert.spec, carry_dwell_steps=round(hold_s * POLICY_HZ))
     return expert
 
 
