@@ -17,10 +17,11 @@ import gymnasium as gym
 import numpy as np
 import pandas as pd
 
+from impact_envs.control.controller import CONTROLLERS
 from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.interface import Policy
 from impact_eval.grid import format_value
-from impact_eval.methods import CONTROLLERS, MethodSpec, temporary_method
+from impact_eval.methods import MethodSpec, temporary_method
 
 
 class EvaluationError(ImpactError):

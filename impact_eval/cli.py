@@ -26,6 +26,13 @@ QUICK_DEFAULTS = {
 """The embedded defaults of ``--quick`` (the README's main job); methods: see quick_methods."""
 
 
+def _method_choices() -> list[str]:
+    """Every registered method (the registry, imported only when a parser is built)."""
+    from impact_eval.methods import method_choices
+
+    return method_choices()
+
+
 def quick_methods(env_id: str) -> str:
     """The learned methods when their checkpoints ship with the package, else scripted ones;
     IMPACT with both controller presets (``default`` and the paper-literal ``paper``)."""
@@ -66,8 +73,7 @@ def sweep_parser() -> argparse.ArgumentParser:
     p.add_argument("--env", help="env id, e.g. IMPACT/Hammer-v0")
     p.add_argument(
         "--method",
-        help="comma list: scripted, scripted_impact, "
-        "vanilla_dp, augmented_dp, impact, sb3:<path.zip>",
+        help="comma list of: " + ", ".join(_method_choices()),
     )
     grid = p.add_mutually_exclusive_group()
     grid.add_argument(

@@ -30,12 +30,12 @@ from pathlib import Path
 
 import gymnasium as gym
 
+from impact_envs.control.controller import CONTROLLERS
 from impact_envs.control.presets import PRESETS
 from impact_envs.errors import CheckpointError, InvalidArgumentError, check_choice
 from impact_envs.policies.interface import Policy
 from impact_eval.sb3 import load_sb3, sb3_action_mode
 
-CONTROLLERS: tuple[str, ...] = ("impedance", "impact")
 """Values of the env's ``controller`` kwarg."""
 
 CHECKPOINTS_ENV_VAR = "IMPACT_CHECKPOINTS"

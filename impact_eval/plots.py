@@ -4,7 +4,8 @@
    (the layout of the paper's simulation-benchmark figure).
 2. ``success_vs_<param>``: success rate with Wilson 95 % bands, one line per method.
 3. ``energy_vs_<param>``: joint mechanical energy per episode, mean ± std.
-4. ``safety_vs_<param>``: peak contact force and peak joint torque, means.
+4. ``safety_vs_<param>``: peak contact force, sustained contact (p95, time above 20 N), peak
+   joint torque, means.
 """
 
 from __future__ import annotations

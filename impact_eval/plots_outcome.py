@@ -79,9 +79,15 @@ def plot_energy(episodes: pd.DataFrame, summary: pd.DataFrame, out_dir: Path,
 
 def plot_safety(episodes: pd.DataFrame, summary: pd.DataFrame, out_dir: Path,
                 stem: str) -> list[Path]:
-    """Peak contact force and peak joint torque, successful and failed episodes apart."""
-    fig = _grid(episodes, summary, [("peak_contact_force_n", "peak contact force [N]"),
-                                    ("peak_torque_nm", "peak joint torque [Nm]")], "safety")
+    """Peak contact force, the sustained-contact measures (95th percentile of the contact
+    force, time above libfranka's example threshold of 20 N) and peak joint torque,
+    successful and failed episodes apart. Tables written before the sustained columns
+    existed get the peak panels only."""
+    columns = [("peak_contact_force_n", "peak contact force [N]"),
+               ("contact_p95_n", "contact force, 95th percentile [N]"),
+               ("contact_over_20n_s", "time above 20 N [s]"),
+               ("peak_torque_nm", "peak joint torque [Nm]")]
+    fig = _grid(episodes, summary, [c for c in columns if c[0] in episodes.columns], "safety")
     return save_figure(fig, out_dir, stem)
 
 

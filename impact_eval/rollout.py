@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from impact_envs.errors import SimulationError
-from impact_envs.policies.interface import Policy, stack_obs
+from impact_envs.policies.interface import FinishingPolicy, Policy, SeededPolicy, stack_obs
 from impact_eval.metrics import EpisodeTracker
 
 
@@ -92,9 +92,8 @@ class LockstepBatch:
         n = len(jobs)
         seed_global_rngs(jobs[0].seed)
         self.policy.reset(n)
-        seed_envs = getattr(self.policy, "seed_envs", None)
-        if callable(seed_envs):  # optional: per-episode noise, independent of batch layout
-            seed_envs([job.seed for job in jobs])
+        if isinstance(self.policy, SeededPolicy):  # per-episode noise, whatever the batch
+            self.policy.seed_envs([job.seed for job in jobs])
         trackers = [EpisodeTracker(self.policy_dt) for _ in range(n)]
         obs = [self._reset(i, job, trackers[i], on_finish) for i, job in enumerate(jobs)]
         while not all(t.done for t in trackers):
@@ -164,7 +163,6 @@ class LockstepBatch:
         video = self.videos.pop(i, None)
         if video is not None:
             video.close()
-        finish_envs = getattr(self.policy, "finish_envs", None)
-        if callable(finish_envs):  # optional: stop computing actions that would be discarded
-            finish_envs([i])
+        if isinstance(self.policy, FinishingPolicy):  # stop computing discarded actions
+            self.policy.finish_envs([i])
         on_finish(i, tracker.row())

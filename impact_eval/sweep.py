@@ -60,7 +60,7 @@ class SweepConfig:
 
 
 @dataclass(frozen=True)
-class Task:
+class EpisodeBatch:
     """Up to ``envs_per_worker`` episodes of one (method, value), run in lockstep."""
 
     method: str
@@ -68,7 +68,7 @@ class Task:
     jobs: tuple[EpisodeJob, ...]
 
 
-def plan_tasks(cfg: SweepConfig, done: set[tuple[str, str, int]]) -> list[Task]:
+def plan_tasks(cfg: SweepConfig, done: set[tuple[str, str, int]]) -> list[EpisodeBatch]:
     """Tasks for every cell not in ``done`` (keys as ``csvio.row_key``).
 
     Ordered value-major, then episode block, then method, so that an interrupted sweep leaves
@@ -86,7 +86,7 @@ def plan_tasks(cfg: SweepConfig, done: set[tuple[str, str, int]]) -> list[Task]:
                     if (method, format_value(value), e) not in done
                 )
                 if jobs:
-                    tasks.append(Task(method, value, jobs))
+                    tasks.append(EpisodeBatch(method, value, jobs))
     return tasks
 
 
@@ -121,7 +121,8 @@ class Worker:
             self.policies[method] = spec.build(self.cfg.canonical_env_id, env)
         return self.policies[method]
 
-    def run(self, task: Task, sink: RowSink, heartbeat: Callable[[], None] | None = None) -> None:
+    def run(self, task: EpisodeBatch, sink: RowSink,
+            heartbeat: Callable[[], None] | None = None) -> None:
         """Run one task; ``sink`` receives each full CSV row as its episode ends."""
         from impact_eval.methods import resolve_method
 
@@ -151,7 +152,7 @@ class Worker:
 
         batch.run(task.jobs, on_finish, heartbeat)
 
-    def _videos(self, task: Task) -> dict[int, object]:
+    def _videos(self, task: EpisodeBatch) -> dict[int, object]:
         """The task's episodes to record (episode index < ``video_episodes``), by batch index."""
         if not self.cfg.video_episodes:
             return {}
@@ -218,7 +219,7 @@ def _context() -> mp.context.BaseContext:
     return mp.get_context("forkserver" if "forkserver" in methods else "spawn")
 
 
-def _run_inline(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink) -> None:
+def _run_inline(cfg: SweepConfig, tasks: Sequence[EpisodeBatch], sink: RowSink) -> None:
     """Run all tasks in this process (``--workers 1``)."""
     worker = Worker(cfg)
     try:
@@ -228,7 +229,7 @@ def _run_inline(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink) -> None:
         worker.close()
 
 
-def _run_parallel(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink, n: int) -> None:
+def _run_parallel(cfg: SweepConfig, tasks: Sequence[EpisodeBatch], sink: RowSink, n: int) -> None:
     """Run tasks on ``n`` worker processes; the parent only collects rows."""
     ctx = _context()
     task_q, result_q = ctx.Queue(), ctx.Queue()
@@ -272,7 +273,7 @@ def _collect(procs: Iterable[mp.Process], result_q: mp.Queue, n_tasks: int, sink
             raise SweepError(f"worker failed: {payload}; rerun with --resume after fixing it")
 
 
-def run_sweep(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink) -> int:
+def run_sweep(cfg: SweepConfig, tasks: Sequence[EpisodeBatch], sink: RowSink) -> int:
     """Run ``tasks``, calling ``sink(row)`` in this process for every finished episode.
 
     Returns:

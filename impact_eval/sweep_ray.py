@@ -18,13 +18,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from impact_envs.parallel import ray_session, ray_task_options, single_threaded_torch
-from impact_eval.sweep import RowSink, SweepConfig, SweepError, Task, Worker
+from impact_eval.sweep import EpisodeBatch, RowSink, SweepConfig, SweepError, Worker
 
 _WORKERS: dict[SweepConfig, Worker] = {}
 """This Ray worker process's ``Worker`` (one sweep at a time; a new sweep replaces it)."""
 
 
-def run_task(cfg: SweepConfig, task: Task) -> list[dict[str, object]]:
+def run_task(cfg: SweepConfig, task: EpisodeBatch) -> list[dict[str, object]]:
     """Body of one Ray task: run ``task`` and return its CSV rows (in a Ray worker)."""
     single_threaded_torch()
     worker = _WORKERS.get(cfg)
@@ -38,7 +38,7 @@ def run_task(cfg: SweepConfig, task: Task) -> list[dict[str, object]]:
     return rows
 
 
-def run_on_ray(cfg: SweepConfig, tasks: Sequence[Task], sink: RowSink) -> None:
+def run_on_ray(cfg: SweepConfig, tasks: Sequence[EpisodeBatch], sink: RowSink) -> None:
     """Run ``tasks`` on Ray; ``sink(row)`` is called in this process for every episode."""
     with ray_session(cfg.ray_address) as ray:
         remote = ray.remote(run_task).options(**ray_task_options())

@@ -13,8 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from impact_envs.errors import InvalidArgumentError
+from impact_envs.rates import POLICY_HZ
 
-VIDEO_FPS = 30
+VIDEO_FPS = POLICY_HZ
 """One frame per policy step."""
 
 

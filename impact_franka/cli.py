@@ -22,11 +22,11 @@ import json
 import sys
 from pathlib import Path
 
+from impact_envs.control.controller import CONTROLLERS
 from impact_envs.control.presets import PRESETS
 from impact_envs.errors import ImpactError
 from impact_franka.fci import TORQUE_SOURCES
 
-CONTROLLERS = ("impact", "impedance")
 REALTIME = ("ignore", "enforce")
 MODELS = ("pinocchio", "franka")
 

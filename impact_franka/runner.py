@@ -16,7 +16,7 @@ import signal
 import threading
 import time
 from dataclasses import dataclass, field, replace
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 import numpy as np
 import pandas as pd
@@ -27,7 +27,7 @@ from impact_envs.control.limits import (
     LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S,
     limit_rate_libfranka_kernel,
 )
-from impact_franka.fci import check_torque_source, reading, torque_command
+from impact_franka.fci import FciReading, check_torque_source, reading, torque_command
 
 WARM_TICKS = 200
 """``compute`` calls before the loop (numba compilation and the learner's first step)."""
@@ -141,18 +141,63 @@ def _ramp(now: float, end: float | None, ramp_s: float) -> float:
     return up if end is None else min(up, max(0.0, 1.0 - (now - end) / ramp_s))
 
 
+class TargetSource(Protocol):
+    """Where the loop's TCP target comes from, read once per 1 ms cycle (keep it cheap).
+
+    ``start`` gets the TCP pose when the loop begins (after the warm-up) and the controller's
+    arm model (its TCP is updated every cycle); ``target`` returns
+    ``(position (3,) [m], quaternion (4,) w-first)`` for the cycle at ``now_s`` seconds into
+    the loop, given that cycle's reading; ``close`` ends it (every exit path calls it)."""
+
+    def start(self, pos: np.ndarray, quat: np.ndarray, arm: object) -> None: ...
+
+    def target(self, now_s: float, r: FciReading) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def close(self) -> None: ...
+
+
+class HoldTarget:
+    """The start pose, moved once by ``step`` (``TargetStep``) if given."""
+
+    def __init__(self, step: TargetStep | None = None) -> None:
+        self.step = step
+        self.pos, self.quat = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
+
+    def start(self, pos: np.ndarray, quat: np.ndarray, arm: object) -> None:
+        self.pos, self.quat = pos.copy(), quat.copy()
+        self._stepped = pos + (self.step.offset_m if self.step is not None else 0.0)
+
+    def target(self, now_s: float, r: FciReading) -> tuple[np.ndarray, np.ndarray]:
+        if self.step is None or now_s < self.step.at_s:
+            return self.pos, self.quat
+        return self._stepped, self.quat
+
+    def close(self) -> None:
+        pass
+
+
 def hold(robot: object, controller: ImpactController, seconds: float,
          float_only: bool = False, budget_s: float = BUDGET_S,
          ramp_s: float = RAMP_S, torque_source: str = "tau_J",
          step: TargetStep | None = None) -> LoopReport:
     """Hold the current TCP pose for ``seconds`` (or float: zero torques) on ``robot``
-    (a ``pylibfranka.Robot``); returns what the loop measured.
+    (a ``pylibfranka.Robot``), ``step`` moving the target once; ``run_loop``."""
+    return run_loop(robot, controller, seconds, HoldTarget(step), float_only=float_only,
+                    budget_s=budget_s, ramp_s=ramp_s, torque_source=torque_source)
+
+
+def run_loop(robot: object, controller: ImpactController, seconds: float,
+             source: TargetSource, float_only: bool = False, budget_s: float = BUDGET_S,
+             ramp_s: float = RAMP_S, torque_source: str = "tau_J") -> LoopReport:
+    """Track ``source``'s targets for ``seconds`` (or float: zero torques) on ``robot``;
+    returns what the loop measured. Time is the robot's own clock (``RobotState.time``, 1 ms
+    per cycle; a simulator slower than real time runs its clock slower): the targets, the
+    duration, the ramps and ``ticks.csv``'s ``t_s`` follow it, not the wall clock.
 
     The command is ramped in over ``ramp_s`` and out over ``ramp_s`` at every end, then
     rate-limited against the previous command exactly as libfranka's ``limitRate`` (the
     ramp must not add a step the robot refuses). ``torque_source`` (``fci.TORQUE_SOURCES``)
-    says what the controller reads as the measured joint torque; ``step`` moves the held
-    target once during the hold.
+    says what the controller reads as the measured joint torque.
 
     A reflex (the robot stops the motion) ends the loop with ``stop_reason`` "reflex", the
     robot's message in ``robot_message`` and its error flags in ``robot_errors``; the ticks
@@ -168,7 +213,8 @@ def hold(robot: object, controller: ImpactController, seconds: float,
     _warm(controller, first.q, first.tau_measured, pos, quat)
     rows: list[tuple] = []
     sent, reason, end, strikes, held, message = np.zeros(7), "", None, 0, 0, ""
-    now_prev, success = 0.0, 1.0
+    success, robot_t0 = 1.0, None
+    source.start(pos, quat, arm)
     active = robot.start_torque_control()  # type: ignore[attr-defined]
     start = time.perf_counter()
     sig = controller.signals
@@ -176,14 +222,16 @@ def hold(robot: object, controller: ImpactController, seconds: float,
         with _StopRequest() as stop:
             while True:
                 state, _ = active.readOnce()
+                robot_t = state.time.to_sec()  # the robot's clock: 1 ms per cycle
+                robot_t0 = robot_t if robot_t0 is None else robot_t0
+                now = robot_t - robot_t0
                 r = reading(state)
                 t0 = time.perf_counter_ns()
                 tau_meas = r.tau_measured + arm.gravity if add_gravity else r.tau_measured
-                target = pos if step is None or now_prev < step.at_s else pos + step.offset_m
-                tau = controller.compute(r.q, r.dq, tau_meas, target, quat)
+                target_pos, target_quat = source.target(now, r)
+                tau = controller.compute(r.q, r.dq, tau_meas, target_pos, target_quat)
                 cmd = np.zeros(7) if float_only else torque_command(tau, arm.gravity)
                 cost = (time.perf_counter_ns() - t0) * 1e-9
-                now = now_prev = time.perf_counter() - start
                 rate = float(state.control_command_success_rate)
                 if now > SUCCESS_RATE_AFTER_S:
                     success = min(success, rate)
@@ -210,6 +258,8 @@ def hold(robot: object, controller: ImpactController, seconds: float,
     except (plf.ControlException, plf.NetworkException, plf.CommandException) as exc:
         message, reason = " ".join(str(exc).split()), "reflex"
         held = held if end is not None else len(rows)
+    finally:
+        source.close()
     report = _report(pd.DataFrame(rows, columns=TICK_COLUMNS), time.perf_counter() - start,
                      float(np.linalg.norm(pos - first.pos_ee)), robot, reason, held)
     return replace(report, robot_message=message, command_success_rate_min=success)

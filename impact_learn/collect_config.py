@@ -5,10 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from impact_envs.control.controller import CONTROLLERS
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.parallel import check_executor
 
-CONTROLLERS = ("impedance", "impact")
 COMPENSATIONS = ("none", "closed_loop", "privileged")
 """Expert compensation modes (``impact_envs.policies.scripted.COMPENSATIONS``)."""
 

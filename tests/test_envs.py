@@ -112,7 +112,7 @@ def test_mass_is_set_from_nominal_not_compounded():
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"controller": "pid"}, "valid choices: impact, impedance"),
+        ({"controller": "pid"}, "valid choices: impedance, impact"),
         ({"estimator": "kalman"}, "valid choices: residual, momentum"),
         ({"object_mass": -1.0}, "valid: 0.05 to 12.0 kg"),
         ({"render_mode": "depth"}, "valid choices: rgb_array"),

@@ -41,7 +41,10 @@ __all__ = ["INPUT_ABS_MAX", "MODES", "ArmDynamics", "ControllerSignals", "Impact
            "Mode", "describe_bad_input"]
 
 Mode = Literal["impact", "impedance"]
-MODES: tuple[str, ...] = ("impact", "impedance")
+CONTROLLERS: tuple[str, ...] = ("impedance", "impact")
+"""The controller modes: the baseline impedance law and IMPACT. The one definition: the env,
+impact-eval, impact-collect and impact-robot take their choices from here."""
+MODES = CONTROLLERS
 
 
 def limit_torch_threads() -> None:

@@ -15,7 +15,7 @@ def regularized_wrench_map(
     Applied to a joint torque r (7,) it gives the regularized least-squares wrench
     argmin_w |J^T w - r|^2 + damping^2 |w|^2 (paper, "Estimating External Wrenches").
     J J^T + damping^2 I is symmetric positive definite for damping > 0, so the Cholesky solve
-    (``kernels.regularized_wrench_map``) never meets a singular matrix.
+    (``kernel_math.regularized_wrench_map``) never meets a singular matrix.
 
     Args:
         jacobian: (6, 7) Jacobian.

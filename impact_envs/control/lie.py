@@ -84,7 +84,8 @@ def quat_conjugate(quat: np.ndarray) -> np.ndarray:
 
 
 def _quat_log_tuple(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:
-    """Rotation vector of a unit quaternion with w >= 0 (angle in [0, pi], ``kernels.quat_log``)."""
+    """Rotation vector of a unit quaternion with w >= 0 (angle in [0, pi],
+    ``kernel_math.quat_log``)."""
     from impact_envs.control.kernel_math import quat_log
 
     return quat_log(float(w), float(x), float(y), float(z))
@@ -137,7 +138,7 @@ def orientation_error(
 ) -> np.ndarray:
     """Log(R_d R^T) computed as the log of the quaternion q_d * conj(q(R)) (shortest arc).
 
-    The controller's per-tick pose error is the same function (``kernels.orientation_error``).
+    The controller's per-tick pose error is the same function (``kernel_math.orientation_error``).
 
     Args:
         quat_target: Desired orientation q_d (w, x, y, z), normalized here.

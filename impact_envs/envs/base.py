@@ -20,7 +20,7 @@ import numpy as np
 from gymnasium import spaces
 
 from impact_envs.control.config import ControllerConfig, EstimatorConfig
-from impact_envs.control.controller import ImpactController
+from impact_envs.control.controller import CONTROLLERS, ImpactController
 from impact_envs.control.internal_model import ModelSnapshot
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.control.presets import PRESETS, preset_config, preset_name
@@ -28,14 +28,12 @@ from impact_envs.envs.options import RenderOptions, RobotOptions
 from impact_envs.envs.state import EnvState, capture, restore
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.loop import ClosedLoop, TickTargets
+from impact_envs.rates import CONTROL_HZ, POLICY_HZ
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
 from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import ObsEntry, Task, refresh_constants
 
-POLICY_HZ = 30
-CONTROL_HZ = 1000
-CONTROLLERS = ("impact", "impedance")
 ESTIMATORS = ("residual", "momentum")
 REWARD_TYPES = ("sparse", "dense")
 """``"sparse"``: 1.0 on steps where the task is accomplished, else 0.0 (default);

@@ -9,6 +9,7 @@ observation stacked along a leading batch axis: ``{key: array (B, *shape)}``. Ac
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -27,6 +28,27 @@ class Policy(Protocol):
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Return actions ``(B, 10)`` float32 for the batched observation ``obs``."""
+        ...
+
+
+@runtime_checkable
+class SeededPolicy(Policy, Protocol):
+    """Optional hook: a policy with per-episode randomness (e.g. diffusion noise) that the
+    evaluator seeds per episode, so an episode's actions do not depend on the batch it ran in.
+    ``impact_eval.rollout`` calls it after ``reset``."""
+
+    def seed_envs(self, episode_seeds: Sequence[int]) -> None:
+        """Seed env ``i``'s randomness with ``episode_seeds[i]``."""
+        ...
+
+
+@runtime_checkable
+class FinishingPolicy(Policy, Protocol):
+    """Optional hook: told which envs of the batch ended, so it can stop computing their
+    actions (``impact_eval.rollout`` calls it as each episode ends)."""
+
+    def finish_envs(self, indices: Sequence[int]) -> None:
+        """Envs ``indices`` of the current batch have ended."""
         ...
 
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
 from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_envs.rates import POLICY_HZ
 
 GRAVITY = 9.81
 OPEN, CLOSED = -1.0, 1.0
@@ -203,7 +204,7 @@ class PickPlaceExpert:
             if self.compensation == "closed_loop":
                 self.carry_z[i] = s.carry_z + s.carry_jitter_m * _unit_from_obs(o)
         waypoint, rot = self._waypoint(i, o)
-        step = s.speed_m_s / 30.0
+        step = s.speed_m_s / POLICY_HZ
         delta = waypoint - self.target[i]
         dist = np.linalg.norm(delta)
         z_before = self.target[i][2]
@@ -229,9 +230,9 @@ class PickPlaceExpert:
             return
         error = self.target[i][2] - float(o["ee_pos"][2])
         self.integral_z[i] = float(np.clip(
-            self.integral_z[i] + s.lift_gain_per_s * error / 30.0, 0.0, s.max_offset_m))
+            self.integral_z[i] + s.lift_gain_per_s * error / POLICY_HZ, 0.0, s.max_offset_m))
         wanted = float(np.clip(s.lift_gain * error + self.integral_z[i], 0.0, s.max_offset_m))
-        step = s.speed_m_s / 30.0
+        step = s.speed_m_s / POLICY_HZ
         self.offset_z[i] += float(np.clip(wanted - self.offset_z[i], -step, step))
 
     def _advance(self, i: int, o: dict[str, np.ndarray]) -> None:

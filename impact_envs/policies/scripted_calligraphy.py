@@ -22,6 +22,7 @@ import numpy as np
 
 from impact_envs.control.lie import rot6d_from_matrix
 from impact_envs.errors import InvalidArgumentError
+from impact_envs.rates import POLICY_HZ
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])
 """TCP pointing down with its x axis along world +x (the home yaw)."""
@@ -60,7 +61,7 @@ class CalligraphyExpert:
         """Actions (B, 10): TCP target position [m], rot6d (pointing down), gripper closed."""
         out = np.zeros((self.n, 10), dtype=np.float32)
         rot6d = rot6d_from_matrix(R_DOWN)
-        max_step = self.speed_m_s / 30.0
+        max_step = self.speed_m_s / POLICY_HZ
         for i in range(self.n):
             goal_tcp = np.asarray(obs["goal_pos"][i], dtype=float) + [0, 0, self.tip_offset_m]
             if self.target[i] is None:
@@ -84,7 +85,7 @@ class CalligraphyExpert:
             return np.zeros(2)
         err = prev[:2] - np.asarray(tip[:2], dtype=float)  # reference now vs tip now
         lim = self.max_correction_m
-        self.integral[i] = np.clip(self.integral[i] + self.ki_per_s * err / 30.0, -lim, lim)
+        self.integral[i] = np.clip(self.integral[i] + self.ki_per_s * err / POLICY_HZ, -lim, lim)
         return np.clip(self.kp * err + self.integral[i], -lim, lim)
 
 

@@ -13,6 +13,7 @@ import mujoco
 import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
+from impact_envs.rates import POLICY_HZ
 from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import BodyMass, ObsEntry, Task, TaskParam
@@ -195,7 +196,7 @@ class CalligraphyTask(Task):
 
     # ------------------------------------------------------------- observation
     def observation(self, sim: FrankaSim) -> dict[str, np.ndarray]:
-        goal, _ = self.reference.at(float(sim.data.time) + 1.0 / 30.0)
+        goal, _ = self.reference.at(float(sim.data.time) + 1.0 / POLICY_HZ)
         return {
             "object_pos": self.tip_pos(sim),
             "object_rot6d": rot6d_from_matrix(sim.data.xmat[self.pen].reshape(3, 3)),

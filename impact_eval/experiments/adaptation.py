@@ -54,6 +54,7 @@ from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
 from impact_envs.policies.scripted import PickPlaceExpert
+from impact_envs.rates import POLICY_HZ
 
 PHASES = ("A", "B", "C")
 MAX_TARGET_VZ_M_S = 0.02
@@ -66,7 +67,7 @@ ADAPTED_M = 0.01
 SETTLE_S = 1.0
 """Settling time after the last vertical target motion for ``peak_err_z_settled_m`` [s]."""
 AXES = ("fx", "fy", "fz", "tx", "ty", "tz")
-CONTROLLERS = {"impact": ("impact", "default"), "impact_paper": ("impact", "paper"),
+PROTOCOL_CONTROLLERS = {"impact": ("impact", "default"), "impact_paper": ("impact", "paper"),
                "impedance": ("impedance", "default")}
 """Column label -> (env ``controller``, ``controller_preset``)."""
 SIGNALS = ("wrench_imp_world", "wrench_ext_world", "wrench_slow_world", "wrench_pred_world",
@@ -82,7 +83,7 @@ def protocol_expert(env_id: str, hold_s: float) -> PickPlaceExpert:
                                    "valid: IMPACT/Dumbbell-v0, IMPACT/Hammer-v0")
     if hold_s < 0.0:
         raise InvalidArgumentError(f"--hold-s must be >= 0 [s], got {hold_s}")
-    expert.spec = replace(expert.spec, carry_dwell_steps=round(hold_s * 30))
+    expert.spec = replace(expert.spec, carry_dwell_steps=round(hold_s * POLICY_HZ))
     return expert
 
 
@@ -90,10 +91,10 @@ def run_sequence(env_id: str, controller: str, masses: tuple[float, ...],
                  seed: int, hold_s: float = 0.0) -> pd.DataFrame:
     """Run one episode per mass with a persistent internal model; rows at 30 Hz.
 
-    ``controller``: a key of ``CONTROLLERS``.
+    ``controller``: a key of ``PROTOCOL_CONTROLLERS``.
     """
     expert = protocol_expert(env_id, hold_s)
-    mode, preset = CONTROLLERS[controller]
+    mode, preset = PROTOCOL_CONTROLLERS[controller]
     env = gym.make(env_id, controller=mode, controller_preset=preset,
                    persist_internal_model=True, terminate_on_success=True)
     param = env.unwrapped.param_name
@@ -296,7 +297,7 @@ def main(argv: list[str] | None = None) -> int:
     for k in range(args.repeats):
         seed = args.seed + REPEAT_SEED_STRIDE * k
         df = pd.concat([run_sequence(args.env, c, masses, seed, args.hold_s)
-                        for c in CONTROLLERS], ignore_index=True)
+                        for c in PROTOCOL_CONTROLLERS], ignore_index=True)
         if k == 0:
             df.to_csv(args.out / "timeseries.csv", index=False)
             figs = plot(df, args.out / "protocol")

@@ -135,7 +135,7 @@ def model_predict(buf32, weights, biases, buf) -> None:
 
 @njit(cache=True)
 def gate_update(is_open, surprise, slow_rate, open_n, release_n, slow_rate_max):
-    """Schmitt trigger (surprise_gate.py); returns (new is_open, learn on this tick)."""
+    """Schmitt trigger (gate.py); returns (new is_open, learn on this tick)."""
     quasi_steady = slow_rate <= slow_rate_max
     if is_open:
         if surprise < release_n:
