@@ -22,6 +22,7 @@ import json
 import sys
 from pathlib import Path
 
+from impact_envs.cli import OneLineParser
 from impact_envs.control.controller import CONTROLLERS
 from impact_envs.control.presets import PRESETS
 from impact_envs.errors import ImpactError
@@ -32,7 +33,7 @@ MODELS = ("pinocchio", "franka")
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="impact-robot", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="impact-robot", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     for name in ("check", "hold"):
         p = sub.add_parser(name)
@@ -92,6 +93,9 @@ def _check_args(args: argparse.Namespace) -> None:
     """One-line errors before anything connects (a run must not end unable to save its log)."""
     if not args.seconds > 0:
         raise ImpactError(f"invalid --seconds {args.seconds!r}; valid: > 0")
+    step_at = getattr(args, "step_at_s", 0.0)
+    if getattr(args, "step_m", None) is not None and not 0.0 <= step_at < args.seconds:
+        raise ImpactError(f"invalid --step-at-s {step_at!r}; valid: 0 <= value < --seconds")
     if not 0.0 <= args.max_payload_kg <= 20.0:
         raise ImpactError(f"invalid --max-payload-kg {args.max_payload_kg!r}; valid: 0 to 20")
     out = getattr(args, "out", None)

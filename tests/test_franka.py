@@ -531,3 +531,27 @@ def test_a_policy_target_refuses_a_bad_workspace() -> None:
 
     with pytest.raises(FrankaError, match="invalid workspace"):
         PolicyTarget(CirclePolicy, None, workspace=(np.ones(3), np.zeros(3)))
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["hold", "--host", "127.0.0.1", "--seconds", "5", "--step-m", "0,0,-0.05", "--step-at-s",
+      "9"], "invalid --step-at-s"),
+    (["hold", "--host", "127.0.0.1", "--step-m", "0,0,0.01", "--step-at-s", "nan"],
+     "invalid --step-at-s"),
+    (["hold", "--host", "127.0.0.1", "--max-payload-kg", "-1"], "invalid --max-payload-kg"),
+])
+def test_bad_hold_arguments_are_one_line_before_connecting(argv, message, capsys) -> None:
+    from impact_franka.cli import main
+
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"impact-robot: {message}") and err.count("\n") == 1
+
+
+def test_a_bad_flag_value_is_one_line_exit_2(capsys) -> None:
+    from impact_franka.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["hold", "--host", "127.0.0.1", "--step-m", "0,0,0.5"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1 and "invalid step" in err
