@@ -89,6 +89,7 @@ class PolicyTarget:
         self.low, self.high, self.max_step_m = low, high, float(max_step_m)
         self._args = (make_policy, extra_obs, gripper_host)
         self.refused = self.actions = 0
+        self.finished = False  # a policy runs until the loop's time is up
         self._proc: Any = None
 
     def start(self, pos: np.ndarray, quat: np.ndarray, arm: Any) -> None:

@@ -28,13 +28,21 @@ from impact_envs.control.limits import (
     LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S,
     limit_rate_libfranka_kernel,
 )
-from impact_franka.fci import FciReading, check_torque_source, reading, torque_command
+from impact_franka.fci import (
+    FciReading,
+    FrankaError,
+    check_torque_source,
+    reading,
+    torque_command,
+)
 
 WARM_TICKS = 200
 """``compute`` calls before the loop (numba compilation and the learner's first step)."""
-TICK_COLUMNS = ("t_s", "pos_error_m", "pos_error_z_m", "wrench_ext_z_n", "wrench_slow_z_n",
-                "wrench_pred_z_n", "wrench_imp_z_n", "wrench_ff_z_n", "gate_open",
-                "guard_holding", "command_success_rate", "tick_compute_s")
+TICK_COLUMNS = ("t_s", "pos_error_m", "pos_error_x_m", "pos_error_y_m", "pos_error_z_m",
+                "wrench_ext_x_n", "wrench_ext_y_n", "wrench_ext_z_n", "wrench_slow_z_n",
+                "wrench_pred_x_n", "wrench_pred_y_n", "wrench_pred_z_n", "wrench_imp_z_n",
+                "wrench_ff_z_n", "gate_open", "guard_holding", "command_success_rate",
+                "tick_compute_s")
 """Columns of ``LoopReport.ticks_table`` (``ticks.csv``), one row per control tick."""
 RAMP_S = 0.3
 """Torque ramp-in at the start and ramp-out at every end (time, signal, budget) [s]."""
@@ -154,7 +162,11 @@ class TargetSource(Protocol):
     ``start`` gets the TCP pose when the loop begins (after the warm-up) and the controller's
     arm model (its TCP is updated every cycle); ``target`` returns
     ``(position (3,) [m], quaternion (4,) w-first)`` for the cycle at ``now_s`` seconds into
-    the loop, given that cycle's reading; ``close`` ends it (every exit path calls it)."""
+    the loop, given that cycle's reading; ``close`` ends it (every exit path calls it).
+    ``finished`` turns True when the source has nothing more to do: the loop then ramps out
+    and ends as when its time is up."""
+
+    finished: bool
 
     def start(self, pos: np.ndarray, quat: np.ndarray, arm: object) -> None: ...
 
@@ -168,6 +180,7 @@ class HoldTarget:
 
     def __init__(self, step: TargetStep | None = None) -> None:
         self.step = step
+        self.finished = False
         self.pos, self.quat = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
 
     def start(self, pos: np.ndarray, quat: np.ndarray, arm: object) -> None:
@@ -225,10 +238,10 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
     gc.collect()  # no garbage collection inside the 1 kHz loop: a full collection of a large
     gc.freeze()   # heap took 18 ms here (missed cycles); reference counting still frees
     gc.disable()  # what the loop drops, and collection resumes when it ends
-    active = robot.start_torque_control()  # type: ignore[attr-defined]
     start = time.perf_counter()
     sig = controller.signals
     try:
+        active = _start_torque_control(robot, plf)
         with _StopRequest() as stop:
             while True:
                 state, _ = active.readOnce()
@@ -246,7 +259,7 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
                 if now > SUCCESS_RATE_AFTER_S:
                     success = min(success, rate)
                 strikes = strikes + 1 if cost > budget_s else 0
-                if end is None and (now >= seconds or stop.requested or
+                if end is None and (now >= seconds or stop.requested or source.finished or
                                     strikes >= BUDGET_STRIKES):
                     end, held = now, len(rows)
                     reason = ("signal" if stop.requested else
@@ -254,9 +267,10 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
                 scale = _ramp(now, end, ramp_s)
                 limit_rate_libfranka_kernel(cmd * scale, sent.copy(),
                                             LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S, sent)
-                rows.append((now, sig.pos_error_norm_m, sig.pose_error[2],
-                             sig.wrench_ext_world[2], sig.wrench_slow_world[2],
-                             sig.wrench_pred_world[2], sig.wrench_imp_world[2],
+                ext, pred, err = sig.wrench_ext_world, sig.wrench_pred_world, sig.pose_error
+                rows.append((now, sig.pos_error_norm_m, err[0], err[1], err[2], ext[0], ext[1],
+                             ext[2], sig.wrench_slow_world[2], pred[0], pred[1], pred[2],
+                             sig.wrench_imp_world[2],
                              sig.wrench_ff_world[2], int(sig.gate_open),
                              int(controller.guard.holding), rate, cost))
                 done = end is not None and scale == 0.0 and not np.any(sent)
@@ -275,6 +289,17 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
     report = _report(pd.DataFrame(rows, columns=TICK_COLUMNS), time.perf_counter() - start,
                      float(np.linalg.norm(pos - first.pos_ee)), robot, reason, held)
     return replace(report, robot_message=message, command_success_rate_min=success)
+
+
+def _start_torque_control(robot: object, plf: object) -> object:
+    """The robot's active torque control, or ``FrankaError`` (one line) if it refuses: the
+    robot is not ready (a reflex, the user stop pressed) or another client is in control."""
+    try:
+        return robot.start_torque_control()  # type: ignore[attr-defined]
+    except (plf.ControlException, plf.NetworkException,  # type: ignore[attr-defined]
+            plf.CommandException) as exc:  # type: ignore[attr-defined]
+        raise FrankaError("the robot refused torque control: "
+                          f"{' '.join(str(exc).split())}") from None
 
 
 def _report(table: pd.DataFrame, elapsed: float, tcp_vs_robot_m: float, robot: object,

@@ -7,17 +7,14 @@ server binds 127.0.0.1:1337 only and is started and stopped by PID.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import signal
-import socket
-import subprocess
 import time
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from franka_servers import port_open
 
 from impact_envs.errors import ImpactError
 from impact_franka.fci import (
@@ -53,62 +50,6 @@ def test_fr3_config_is_libfranka_limits_bounded_tick_and_guard() -> None:
     assert cfg.limits.rate_limiter == "libfranka"
     assert cfg.limits.torque_rate_max_nm_per_s == 1000.0 - 1e-3
     assert cfg.internal_model.learner == "numba" and cfg.guard.enabled
-
-
-def _simulator_python(variable: str = "IMPACT_FRANKY_SIM_PYTHON") -> str:
-    path = os.environ.get(variable, "")
-    if not path or not os.path.exists(path):
-        pytest.skip(f"simulator not given ({variable}); .ci/run sets it")
-    pytest.importorskip("pylibfranka")
-    return path
-
-
-def _port_open(port: int) -> bool:
-    with socket.socket() as s:
-        s.settimeout(0.2)
-        return s.connect_ex(("127.0.0.1", port)) == 0
-
-
-@contextlib.contextmanager
-def _serving(argv: list[str]):
-    """A libfranka-protocol server (``argv``, franky-sim's python) on 127.0.0.1:1337, stopped
-    by PID (its process group) afterwards."""
-    if _port_open(1337):
-        pytest.fail("127.0.0.1:1337 is taken: another robot server is running")
-    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
-    try:
-        deadline = time.monotonic() + 60.0
-        while not _port_open(1337):
-            if proc.poll() is not None or time.monotonic() > deadline:
-                pytest.fail(f"{argv[1:]} did not start serving on 127.0.0.1:1337")
-            time.sleep(0.2)
-        yield "127.0.0.1"
-    finally:
-        os.killpg(proc.pid, signal.SIGTERM)
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-
-
-@pytest.fixture()
-def franky_sim():
-    """franky-sim serving on 127.0.0.1:1337 for one test (a fresh arm pose each time)."""
-    python = _simulator_python()
-    with _serving([python, "-m", "franky_sim.run_server", "-s", "mujoco", "--hostname",
-                   "127.0.0.1"]) as host:
-        yield host
-
-
-@pytest.fixture()
-def franka_sim():
-    """franka-sim 1.1.7 on 127.0.0.1:1337 with its communication-constraint and motion-limit
-    checks on (tests/franka_sim_server.py), for one test."""
-    python = _simulator_python("IMPACT_FRANKA_SIM_PYTHON")
-    with _serving([python, str(Path(__file__).with_name("franka_sim_server.py"))]) as host:
-        yield host
 
 
 def _raw_torque_steps(host: str, step_nm: float) -> str:
@@ -148,14 +89,15 @@ def test_franka_sim_hold_with_the_robot_s_checks_on(franka_sim, capsys) -> None:
     assert "robot errors: none" in out and "MODEL MISMATCH: jacobian" in out
 
 
-def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim, tmp_path,
+def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim_no_friction, tmp_path,
                                                                monkeypatch) -> None:
     """Under franka-sim's communication and motion-limit checks: a 30 s hold with a 5 cm step
     down at 10 s, then SIGINT at 20 s: no reflex, the robot's command success rate >= 0.9,
-    held within 1 mm before the step, a clean exit 0 with the ticks up to the stop. After the
-    step the TCP stops 5-10 mm short (impedance alone: 6.3 mm): the joints' Coulomb friction
-    of our FR3 model, which franka-sim simulates, holds it (docs/franka.md); bounded here at
-    12 mm."""
+    held within 1 mm before the step and 2 mm from 2 s after it, a clean exit 0 with the
+    ticks up to the stop. The arm's joints are without Coulomb friction here: franka-sim's
+    ``tau_J`` echoes the command, so friction reads as an external force that a real FR3's
+    link-side sensors do not see; with our model's friction the TCP stops 5-10 mm short
+    (docs/franka.md, measured by hand)."""
     import threading
 
     import pandas as pd
@@ -182,8 +124,8 @@ def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim, tmp_p
         return original(*args, **kwargs)
 
     monkeypatch.setattr(runner, "hold", marked_hold)
-    code = main(["hold", "--host", franka_sim, "--seconds", "30", "--torque-source", "tau_J+g",
-                 "--step-m", "0,0,-0.05", "--step-at-s", "10", "--out", str(out)])
+    code = main(["hold", "--host", franka_sim_no_friction, "--seconds", "30", "--torque-source",
+                 "tau_J+g", "--step-m", "0,0,-0.05", "--step-at-s", "10", "--out", str(out)])
     assert code == 0
     import json
 
@@ -197,7 +139,7 @@ def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim, tmp_p
     assert len(ticks) == run["ticks"] and 15.0 < ticks["t_s"].iloc[-1] < 25.0
     before = ticks[(ticks["t_s"] > 1.0) & (ticks["t_s"] < 10.0)]
     after = ticks[(ticks["t_s"] > 12.0) & (ticks["t_s"] < 18.0)]
-    assert before["pos_error_m"].max() <= 1e-3 and after["pos_error_m"].max() <= 12e-3
+    assert before["pos_error_m"].max() <= 1e-3 and after["pos_error_m"].max() <= 2e-3
 
 
 def test_collision_thresholds_leave_room_for_the_undeclared_payload() -> None:
@@ -261,7 +203,7 @@ def test_pending_robot_errors_refuse_unless_recover(monkeypatch, capsys) -> None
     """The robot reports an error from an earlier run: impact-robot refuses with one line, and
     with --recover it calls libfranka's automatic error recovery first."""
     plf = pytest.importorskip("pylibfranka")
-    from impact_franka import cli
+    from impact_franka import cli, session
 
     calls = []
 
@@ -279,10 +221,10 @@ def test_pending_robot_errors_refuse_unless_recover(monkeypatch, capsys) -> None
     monkeypatch.setattr(plf, "Robot", _Robot)
     args = cli._parser().parse_args(["check", "--host", "127.0.0.1"])
     with pytest.raises(ImpactError, match=r"reports errors \[joint_reflex\]; valid: .*--recover"):
-        cli._connect(args)
+        session.connect(args)
     assert not calls
     args = cli._parser().parse_args(["check", "--host", "127.0.0.1", "--recover"])
-    cli._connect(args)
+    session.connect(args)
     assert calls == ["recover"] and "recovered: errors now none" in capsys.readouterr().out
 
 
@@ -305,7 +247,7 @@ def test_unreachable_robot_is_one_line(capsys) -> None:
     pytest.importorskip("pylibfranka")
     from impact_franka.cli import main
 
-    if _port_open(1337):
+    if port_open(1337):
         pytest.skip("a robot server is running on 127.0.0.1:1337")
     assert main(["check", "--host", "127.0.0.1", "--seconds", "1"]) == 1
     err = capsys.readouterr().err
@@ -390,36 +332,6 @@ def test_unwritable_out_is_refused_before_connecting(tmp_path, capsys) -> None:
     assert blocker.read_text() == "keep me"
 
 
-def test_an_undeclared_payload_handed_over_during_a_hold_is_learned(tmp_path) -> None:
-    """The paper's hold protocol against franky-sim: 3 kg the robot was not told about
-    arrives at the hand during a 12 s hold (tests/franky_payload_server.py). Impedance alone
-    would sag m g / K = 74 mm; IMPACT learns the weight and holds."""
-    import threading
-
-    import pandas as pd
-
-    from impact_franka.cli import main
-
-    flag = tmp_path / "payload_on"
-    server = [_simulator_python(), str(Path(__file__).with_name("franky_payload_server.py")),
-              "3.0", str(flag)]
-    with _serving(server) as host:
-        timer = threading.Timer(6.0, flag.touch)  # after the imports and warm-up: in the hold
-        timer.start()
-        try:
-            assert main(["hold", "--host", host, "--seconds", "12", "--max-payload-kg", "3",
-                         "--out", str(tmp_path / "run")]) == 0
-        finally:
-            timer.cancel()
-    ticks = pd.read_csv(tmp_path / "run" / "ticks.csv")
-    hold = ticks[ticks["t_s"] <= 12.0]
-    on = hold.index[hold["wrench_ext_z_n"].abs() > 10.0]
-    assert len(on) and hold["t_s"][on[0]] > 0.5  # the load arrived during the hold
-    assert hold["pos_error_m"].max() > 0.01  # and pulled the hand down first
-    assert hold["pos_error_m"].iloc[-1] < 1e-2  # then it was learned (measured 1.6-3.9 mm)
-    assert hold["wrench_pred_z_n"].iloc[-1] == pytest.approx(3.0 * 9.81, abs=6.0)
-
-
 class _Clock:
     """The robot's clock: 1 ms more every time it is read (one read per cycle)."""
 
@@ -479,11 +391,11 @@ def test_a_reflex_keeps_the_ticks_and_exits_1_naming_it(monkeypatch, tmp_path, c
     pytest.importorskip("pylibfranka")
     from impact_envs.control.controller import ImpactController
     from impact_envs.robot.dynamics import PinocchioArm
-    from impact_franka import cli
+    from impact_franka import cli, session
 
     robot = _FakeRobot(fail=50)
-    monkeypatch.setattr(cli, "_connect", lambda args: (None, robot))
-    monkeypatch.setattr(cli, "_controller", lambda args, r: (
+    monkeypatch.setattr(session, "connect", lambda args: (None, robot))
+    monkeypatch.setattr(session, "make_controller", lambda args, r: (
         ImpactController(PinocchioArm(), fr3_config(), mode="impact"), {}))
     out = tmp_path / "run"
     assert cli.main(["hold", "--host", "127.0.0.1", "--seconds", "5", "--out", str(out)]) == 1

@@ -1,0 +1,35 @@
+"""Fixtures of the FCI tests: a simulator serving on 127.0.0.1:1337 for one test."""
+
+from __future__ import annotations
+
+import pytest
+from franka_servers import HERE, serving, simulator_python
+
+
+@pytest.fixture()
+def franky_sim():
+    """franky-sim serving on 127.0.0.1:1337 for one test (a fresh arm pose each time)."""
+    python = simulator_python()
+    with serving([python, "-m", "franky_sim.run_server", "-s", "mujoco", "--hostname",
+                   "127.0.0.1"]) as host:
+        yield host
+
+
+@pytest.fixture()
+def franka_sim():
+    """franka-sim 1.1.7 on 127.0.0.1:1337 with its communication-constraint and motion-limit
+    checks on (tests/franka_sim_server.py), for one test."""
+    python = simulator_python("IMPACT_FRANKA_SIM_PYTHON")
+    with serving([python, str(HERE.joinpath("franka_sim_server.py"))]) as host:
+        yield host
+
+
+
+
+@pytest.fixture()
+def franka_sim_no_friction():
+    """franka-sim as ``franka_sim``, the arm's joints without Coulomb friction
+    (franka_sim_server.py ``--no-joint-friction``)."""
+    python = simulator_python("IMPACT_FRANKA_SIM_PYTHON")
+    with serving([python, str(HERE / "franka_sim_server.py"), "--no-joint-friction"]) as host:
+        yield host

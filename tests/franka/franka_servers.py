@@ -1,0 +1,61 @@
+"""Shared by the FCI tests: libfranka-protocol simulators on 127.0.0.1:1337 (and the
+hand on :1338), each in a virtualenv of its own named by an environment variable (.ci/run
+sets them), started and stopped by PID for one test."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).resolve().parent
+
+
+def simulator_python(variable: str = "IMPACT_FRANKY_SIM_PYTHON") -> str:
+    path = os.environ.get(variable, "")
+    if not path or not os.path.exists(path):
+        pytest.skip(f"simulator not given ({variable}); .ci/run sets it")
+    pytest.importorskip("pylibfranka")
+    return path
+
+
+def port_open(port: int) -> bool:
+    with socket.socket() as s:
+        s.settimeout(0.2)
+        return s.connect_ex(("127.0.0.1", port)) == 0
+
+
+@contextlib.contextmanager
+def serving(argv: list[str]):
+    """A libfranka-protocol server (``argv``, franky-sim's python) on 127.0.0.1:1337, stopped
+    by PID (its process group) afterwards."""
+    if port_open(1337):
+        pytest.fail("127.0.0.1:1337 is taken: another robot server is running")
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60.0
+        while not port_open(1337):
+            if proc.poll() is not None or time.monotonic() > deadline:
+                pytest.fail(f"{argv[1:]} did not start serving on 127.0.0.1:1337")
+            time.sleep(0.2)
+        yield "127.0.0.1"
+    finally:
+        os.killpg(proc.pid, signal.SIGTERM)
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+
+
+def franky_scene(*options: str):
+    """franky-sim with tests/franka/franky_scene_server.py's ``options`` (a payload, a push,
+    a pick-and-place scene) on 127.0.0.1:1337/1338."""
+    return serving([simulator_python(), str(HERE / "franky_scene_server.py"), *options])
