@@ -5,9 +5,10 @@ once per policy step, in ``reset`` and ``step``, with one offscreen ``mujoco.Ren
 image size (made at the first observation, reused, closed by ``env.close()``). Keys:
 ``"<camera>_rgb"`` uint8 (H, W, 3) in [0, 255] and, in ``"rgbd"``, ``"<camera>_depth"``
 float32 (H, W, 1): distance along the camera's optical axis [m], from 0 to the scene's far
-clipping plane (nothing in view reads as the far plane). ``"rgb"`` and ``"rgbd"`` drop the
-task's privileged entries (``Task.privileged_observations``): the policy sees the cameras,
-the robot's own sensors and the task's commands only. ``"state"`` builds nothing here.
+clipping plane (nothing in view reads as the far plane). Sites (markers such as the TCP)
+are not drawn. ``"rgb"`` and ``"rgbd"`` drop the task's privileged entries
+(``Task.privileged_observations``): the policy sees the cameras, the robot's own sensors and
+the task's commands only. ``"state"`` builds nothing here.
 """
 
 from __future__ import annotations
@@ -81,6 +82,8 @@ class PixelObservations:
         self.space = spaces.Dict({**{k: state_space[k] for k in self.state_keys},
                                   **self._image_spaces()})
         self._renderer: mujoco.Renderer | None = None
+        self._option = mujoco.MjvOption()
+        self._option.sitegroup[:] = 0  # sites are markers for people, not things a camera sees
 
     def _image_spaces(self) -> dict[str, spaces.Box]:
         h, w = self.size
@@ -99,7 +102,7 @@ class PixelObservations:
             self._renderer = mujoco.Renderer(self.model, height=h, width=w)
         renderer, images = self._renderer, {}
         for camera in self.cameras:
-            renderer.update_scene(data, camera=camera)
+            renderer.update_scene(data, camera=camera, scene_option=self._option)
             images[f"{camera}_rgb"] = renderer.render()
             if self.depth:
                 renderer.enable_depth_rendering()
