@@ -204,6 +204,8 @@ BAD = {
     "height fractional": (lambda: ObservationOptions(image_height=2.5),
                           "invalid image_height 2.5; valid: an integer from 1 to 4096 px"),
     "width a bool": (lambda: ObservationOptions(image_width=True), "invalid image_width True"),
+    "shadows not a bool": (lambda: ObservationOptions(shadows=1),
+                           "invalid shadows 1; valid: True or False"),
 }
 
 
@@ -225,3 +227,37 @@ def test_bad_camera_or_size_for_the_scene_is_one_line(opts, message):
     with pytest.raises(InvalidArgumentError, match=message) as err:
         gym.make(ENV_IDS[0], observation=opts)
     assert "\n" not in str(err.value)
+
+
+def test_shadows_can_be_switched_off():
+    def first_image(shadows: bool) -> np.ndarray:
+        env = gym.make(ENV_IDS[0], observation=ObservationOptions(
+            "rgb", ("overview",), W, H, shadows=shadows))
+        image = env.reset(seed=0)[0]["overview_rgb"]
+        env.close()
+        return image
+
+    assert not np.array_equal(first_image(True), first_image(False))
+
+
+def test_bench_prints_the_pixel_costs(capsys):
+    """A 2-step ``impact-bench --pixels`` run prints one row per camera and variant and the
+    reference rows (what it prints, never how fast)."""
+    from impact_eval import bench
+
+    bench.main(["--steps", "2", "--repeat", "1", "--pixels", "--image-size", "16"])
+    out = capsys.readouterr().out
+    for row in ("env step, state (reference)", "env step, state+rgb (overview, wrist)",
+                "render wrist rgb+depth", "render overview rgb, no shadows"):
+        assert row in out
+
+
+@pytest.mark.parametrize(("size", "message"), [("0", "need --image-size >= 1, got 0"),
+                                               ("1000", "at most 640x480 px")])
+def test_bench_bad_image_size_is_one_line(size, message, capsys):
+    from impact_eval import bench
+
+    with pytest.raises(SystemExit) as exit_:
+        bench.main(["--pixels", "--image-size", size])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and message in err and err.count("\n") == 1

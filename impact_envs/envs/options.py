@@ -87,12 +87,15 @@ class ObservationOptions:
             (``"overview"``, ``"front"``, ``"side"`` in assets/common.xml, ``"wrist"`` on the
             hand in assets/fr3_hand.xml); ignored in ``"state"`` mode.
         image_width, image_height: Image size [px] (at most the scene's 640x480 buffer).
+        shadows: Draw shadows (as ``render()`` does). On a CPU renderer they are most of the
+            cost of an image (``impact-bench --pixels``, docs/envs.md).
     """
 
     obs_mode: str = "state"
     cameras: tuple[str, ...] = ("overview", "wrist")
     image_width: int = 96
     image_height: int = 96
+    shadows: bool = True
 
     def __post_init__(self) -> None:
         if self.obs_mode not in OBS_MODES:
@@ -106,6 +109,8 @@ class ObservationOptions:
                 "('overview', 'side', 'wrist')")
         for name in ("image_width", "image_height"):
             _pixels(name, getattr(self, name))
+        if not isinstance(self.shadows, bool):
+            raise InvalidArgumentError(f"invalid shadows {self.shadows!r}; valid: True or False")
 
     @property
     def uses_images(self) -> bool:

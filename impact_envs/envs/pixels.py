@@ -76,6 +76,7 @@ class PixelObservations:
         self.model, self.cameras = model, opts.cameras
         self.depth = opts.obs_mode == "rgbd"
         self.size = (int(opts.image_height), int(opts.image_width))
+        self.shadows = opts.shadows
         hidden = () if opts.obs_mode == "state+rgb" else privileged_keys(task)
         self.state_keys = tuple(k for k in state_space.spaces if k not in hidden)
         self.far_m = far_clip_m(model)
@@ -100,6 +101,7 @@ class PixelObservations:
         if self._renderer is None:
             h, w = self.size
             self._renderer = mujoco.Renderer(self.model, height=h, width=w)
+            self._renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.shadows
         renderer, images = self._renderer, {}
         for camera in self.cameras:
             renderer.update_scene(data, camera=camera, scene_option=self._option)
