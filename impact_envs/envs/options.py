@@ -54,8 +54,8 @@ class RobotOptions:
 @dataclass(frozen=True)
 class RenderOptions:
     """Offscreen rendering (``render_mode="rgb_array"``): image size [px] and camera name
-    (``"overview"``, which frames the arm, the objects and the goal, ``"front"`` or ``"side"``;
-    defined in assets/common.xml)."""
+    (``"overview"``, which frames the arm, the objects and the goal, ``"front"`` or ``"side"``,
+    defined in assets/common.xml, or ``"wrist"`` on the hand, assets/fr3_hand.xml)."""
 
     width: int = 320
     height: int = 240
