@@ -13,7 +13,9 @@ are comparable across noisy machines. Each run is repeated ``--repeat`` times (i
 the fastest is kept, like ``timeit``; a second column uses the process CPU time, which other
 processes on a shared machine disturb less. Single process and thread; pin it to one core with
 ``taskset -c 0`` for a strict one-core figure. ``--stages`` adds the per-call cost of each
-part of a control tick at a state taken from the IMPACT run.
+part of a control tick at a state taken from the IMPACT run. ``--pixels`` adds the cost of
+pixel observations per policy step and per camera (``bench_pixels.py``), as ratios to the
+state-mode env step and to raw ``mj_step``.
 """
 
 from __future__ import annotations
@@ -30,9 +32,12 @@ import numpy as np
 
 import impact_envs
 from impact_envs.cli import OneLineParser
+from impact_envs.envs.options import ObservationOptions
+from impact_envs.envs.pixels import check_view
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
+from impact_eval.bench_pixels import pixel_costs, print_pixel_table
 
 
 @dataclass
@@ -164,13 +169,18 @@ def _print_table(args: argparse.Namespace, rtf: dict[str, Timing], n_ticks: int)
 
 
 def _check_args(args: argparse.Namespace) -> None:
-    """One-line ``InvalidArgumentError`` for a step count, repeat count or mass out of range."""
+    """One-line ``InvalidArgumentError`` for a step count, repeat count, mass or image size
+    out of range."""
     if args.steps < 2 or args.repeat < 1:
         raise InvalidArgumentError(
             f"need --steps >= 2 and --repeat >= 1, got {args.steps} and {args.repeat}")
+    if args.image_size < 1:
+        raise InvalidArgumentError(f"need --image-size >= 1, got {args.image_size}")
     env = gym.make(args.env)
     try:
         env.unwrapped.task.param("object_mass").validate(args.mass)
+        size = args.image_size
+        check_view(env.unwrapped.sim.model, "--image-size", (), size, size)
     finally:
         env.close()
 
@@ -183,6 +193,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--repeat", type=int, default=3, help="runs of each kind; best kept")
     parser.add_argument("--stages", action="store_true", help="also print per-stage costs")
+    parser.add_argument("--pixels", action="store_true",
+                        help="also print the pixel-observation cost per step and camera")
+    parser.add_argument("--image-size", type=int, default=ObservationOptions().image_width,
+                        help="--pixels image width and height [px]")
     args = parser.parse_args(argv)
     try:
         _check_args(args)
@@ -202,6 +216,11 @@ def main(argv: list[str] | None = None) -> None:
         print(f"per-call CPU cost [us] at step {args.steps // 2} of the IMPACT run (best of 5):")
         for name, us in _stage_costs(args.env, args.seed, args.mass, args.steps // 2).items():
             print(f"  {name:<42}{us:8.1f}")
+    if args.pixels:
+        raw_step = np.array([rtf["raw"].wall_s, rtf["raw"].cpu_s]) / args.steps
+        costs = pixel_costs(args.env, args.steps, args.seed, args.mass, args.image_size,
+                            args.repeat)
+        print_pixel_table(costs, raw_step, args.image_size)
 
 
 if __name__ == "__main__":

@@ -24,7 +24,8 @@ from impact_envs.control.controller import CONTROLLERS, ImpactController
 from impact_envs.control.internal_model import ModelSnapshot
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.control.presets import PRESETS, preset_config, preset_name
-from impact_envs.envs.options import RenderOptions, RobotOptions
+from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
+from impact_envs.envs.pixels import PixelObservations, check_view
 from impact_envs.envs.state import EnvState, capture, restore
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.loop import ClosedLoop, TickTargets
@@ -106,6 +107,7 @@ class ImpactEnv(gym.Env):
         render_mode: str | None = None,
         render: RenderOptions | None = None,
         reward_type: str = "sparse",
+        observation: ObservationOptions | None = None,
     ) -> None:
         self._init_kwargs = {k: v for k, v in locals().items() if k not in ("self", "__class__")}
         """The constructor's arguments (``__deepcopy__`` and pickling rebuild from them)."""
@@ -137,7 +139,12 @@ class ImpactEnv(gym.Env):
             high=np.concatenate([task.workspace_high, np.ones(7)]).astype(np.float32),
             dtype=np.float32,
         )
-        self.observation_space = self._make_observation_space()
+        self._state_space = self._make_observation_space()
+        obs_opts = observation or ObservationOptions()
+        self._pixels = (PixelObservations(self.sim.model, task, obs_opts, self._state_space)
+                        if obs_opts.uses_images else None)
+        """Camera images in the observation (``envs/pixels.py``); None in ``"state"`` mode."""
+        self.observation_space = self._state_space if self._pixels is None else self._pixels.space
         self._step_count, self._gripper_cmd, self._success_once = 0, -1.0, False
         self._target_pos, self._target_quat = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
 
@@ -154,16 +161,8 @@ class ImpactEnv(gym.Env):
 
     def _check_render(self, render: RenderOptions) -> None:
         """The camera must be one of the scene's and the size fit its offscreen buffer."""
-        model = self.sim.model
-        cameras = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_CAMERA, i)
-                   for i in range(model.ncam)]
-        check_choice("camera", render.camera, cameras)
-        gl = model.vis.global_
-        if render.width > gl.offwidth or render.height > gl.offheight:
-            raise InvalidArgumentError(
-                f"invalid render size {render.width}x{render.height}; valid: at most "
-                f"{gl.offwidth}x{gl.offheight} px (the scene's offscreen buffer, <global "
-                "offwidth offheight> in the scene XML)")
+        check_view(self.sim.model, "render size", (render.camera,), render.width,
+                   render.height)
 
     def _initial_params(self, object_mass: float | None,
                         task_params: dict[str, float] | None) -> dict[str, float]:
@@ -352,8 +351,9 @@ class ImpactEnv(gym.Env):
             "joint_vel": self._dq_meas,
         }
         obs.update(self.task.observation(self.sim))
-        return {k: np.clip(np.asarray(obs[k], dtype=np.float32), space.low, space.high)
-                for k, space in self.observation_space.spaces.items()}
+        obs = {k: np.clip(np.asarray(obs[k], dtype=np.float32), space.low, space.high)
+               for k, space in self._state_space.spaces.items()}
+        return obs if self._pixels is None else self._pixels.observe(obs, self.sim.data)
 
     def _info(self, success: bool, metrics: dict[str, Any] | None) -> dict[str, Any]:
         s = self.controller.signals
@@ -402,6 +402,8 @@ class ImpactEnv(gym.Env):
         return self._renderer.render()
 
     def close(self) -> None:
+        if self._pixels is not None:
+            self._pixels.close()
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None

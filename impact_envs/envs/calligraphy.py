@@ -33,6 +33,13 @@ class CalligraphyEnv(ImpactEnv):
     policy step (hover above the paper between strokes, on the paper while writing). No force
     sensing in observations.
 
+    Pixel modes, ``observation=ObservationOptions(obs_mode=...)``: ``"rgb"`` adds
+    ``"<camera>_rgb"`` uint8 Boxes (H, W, 3) in [0, 255], one per camera (default
+    ``("overview", "wrist")`` at 96x96 px, rendered once per step); ``"rgbd"`` adds
+    ``"<camera>_depth"`` float32 (H, W, 1) [m] too; ``"state+rgb"`` keeps every entry above.
+    ``"rgb"`` and ``"rgbd"`` leave out ``object_pos`` and ``object_rot6d``;
+    ``goal_pos`` stays (a command: no camera sees a character before it is written).
+
     ## Rewards
     Sparse (default, ``reward_type="sparse"``): 1.0 on steps where the task is
     accomplished, else 0.0. ``reward_type="dense"``: a shaped reward in [0, 1], 1.0
@@ -64,7 +71,8 @@ class CalligraphyEnv(ImpactEnv):
     "surface_friction": μ}`` or ``reset(options=...)`` (tool_mass default 0.1, range
     0.02–5 kg, the sweep axis; surface_friction default 0.3, range 0.05–1.5), ``estimator``,
     ``controller_preset``, ``robot``, ``persist_internal_model``, ``terminate_on_success``,
-    ``reward_type``, ``render_mode`` ("rgb_array"), ``render`` (as for ``IMPACT/Hammer-v0``).
+    ``reward_type``, ``render_mode`` ("rgb_array"), ``render``, ``observation`` (as for
+    ``IMPACT/Hammer-v0``).
 
     ## Version history
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
@@ -82,6 +90,8 @@ class CalligraphyEnv(ImpactEnv):
       ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
       ``ControllerConfig`` (replacing ``controller_config``).
       2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
+      2026-11-26: pixel observations (``observation=ObservationOptions(...)``) and a
+      ``"wrist"`` camera added; the default ``"state"`` mode is unchanged bit for bit.
     """
 
     @classmethod

@@ -34,6 +34,13 @@ class DisturbanceEnv(ImpactEnv):
     (x along its length), ``goal_pos`` (3) [m] goal point for the centre of mass. No force
     sensing in observations.
 
+    Pixel modes, ``observation=ObservationOptions(obs_mode=...)``: ``"rgb"`` adds
+    ``"<camera>_rgb"`` uint8 Boxes (H, W, 3) in [0, 255], one per camera (default
+    ``("overview", "wrist")`` at 96x96 px, rendered once per step); ``"rgbd"`` adds
+    ``"<camera>_depth"`` float32 (H, W, 1) [m] too; ``"state+rgb"`` keeps every entry above.
+    ``"rgb"`` and ``"rgbd"`` leave out ``object_pos``, ``object_rot6d`` and
+    ``goal_pos`` (the policy sees the object and the goal marker in the images).
+
     ## Rewards
     Sparse (default, ``reward_type="sparse"``): 1.0 on steps where the task is
     accomplished, else 0.0. ``reward_type="dense"``: a shaped reward in [0, 1], 1.0
@@ -62,7 +69,8 @@ class DisturbanceEnv(ImpactEnv):
     "object_mass": kg, "added_mass": kg}`` or ``reset(options=...)`` (defaults 2 N, 0.3 kg,
     0.3 kg; ranges 0–40 N, 0.05–5 kg, 0–5 kg), ``object_mass`` [kg] (shortcut), ``estimator``,
     ``controller_preset``, ``robot``, ``persist_internal_model``, ``terminate_on_success``,
-    ``reward_type``, ``render_mode`` ("rgb_array"), ``render`` (as for ``IMPACT/Hammer-v0``).
+    ``reward_type``, ``render_mode`` ("rgb_array"), ``render``, ``observation`` (as for
+    ``IMPACT/Hammer-v0``).
 
     ## Version history
     - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
@@ -76,6 +84,8 @@ class DisturbanceEnv(ImpactEnv):
       ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
       ``ControllerConfig`` (replacing ``controller_config``).
       2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
+      2026-11-26: pixel observations (``observation=ObservationOptions(...)``) and a
+      ``"wrist"`` camera added; the default ``"state"`` mode is unchanged bit for bit.
     """
 
     @classmethod

@@ -32,6 +32,13 @@ class DumbbellEnv(ImpactEnv):
     (= bar centre), ``object_rot6d`` (6) dumbbell orientation (x axis along the bar),
     ``goal_pos`` (3) [m] pad centre on the table. No force sensing in observations.
 
+    Pixel modes, ``observation=ObservationOptions(obs_mode=...)``: ``"rgb"`` adds
+    ``"<camera>_rgb"`` uint8 Boxes (H, W, 3) in [0, 255], one per camera (default
+    ``("overview", "wrist")`` at 96x96 px, rendered once per step); ``"rgbd"`` adds
+    ``"<camera>_depth"`` float32 (H, W, 1) [m] too; ``"state+rgb"`` keeps every entry above.
+    ``"rgb"`` and ``"rgbd"`` leave out ``object_pos``, ``object_rot6d`` and
+    ``goal_pos`` (the policy sees the object and the pad in the images).
+
     ## Rewards
     Sparse (default, ``reward_type="sparse"``): 1.0 on steps where the task is
     accomplished, else 0.0. ``reward_type="dense"``: a shaped reward in [0, 1], 1.0
@@ -58,7 +65,8 @@ class DumbbellEnv(ImpactEnv):
     ## Arguments
     As for ``IMPACT/Hammer-v0`` (``controller``, ``estimator``, ``controller_preset``,
     ``robot``, ``persist_internal_model``, ``terminate_on_success``, ``reward_type``,
-    ``render_mode``, ``render``), with ``object_mass`` [kg] defaulting to 2.5 (range 0.1–12).
+    ``render_mode``, ``render``, ``observation``), with ``object_mass`` [kg] defaulting to 2.5
+    (range 0.1–12).
 
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
@@ -72,6 +80,8 @@ class DumbbellEnv(ImpactEnv):
       ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
       ``ControllerConfig`` (replacing ``controller_config``).
       2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
+      2026-11-26: pixel observations (``observation=ObservationOptions(...)``) and a
+      ``"wrist"`` camera added; the default ``"state"`` mode is unchanged bit for bit.
     """
 
     @classmethod

@@ -31,6 +31,13 @@ class HammerEnv(ImpactEnv):
     ``object_rot6d`` (6) hammer orientation (x axis points to the head), ``goal_pos`` (3) [m]
     basket centre. No force sensing in observations.
 
+    Pixel modes, ``observation=ObservationOptions(obs_mode=...)``: ``"rgb"`` adds
+    ``"<camera>_rgb"`` uint8 Boxes (H, W, 3) in [0, 255], one per camera (default
+    ``("overview", "wrist")`` at 96x96 px, rendered once per step); ``"rgbd"`` adds
+    ``"<camera>_depth"`` float32 (H, W, 1) [m] too; ``"state+rgb"`` keeps every entry above.
+    ``"rgb"`` and ``"rgbd"`` leave out ``object_pos``, ``object_rot6d`` and
+    ``goal_pos`` (the policy sees the object and the basket in the images).
+
     ## Rewards
     Sparse (default, ``reward_type="sparse"``): 1.0 on steps where the task is
     accomplished, else 0.0. ``reward_type="dense"``: a shaped reward in [0, 1], 1.0
@@ -61,7 +68,10 @@ class HammerEnv(ImpactEnv):
     ``persist_internal_model`` (keep the learned internal model across resets),
     ``terminate_on_success``, ``reward_type`` ("sparse" | "dense"), ``render_mode``
     ("rgb_array"), ``render`` (``RenderOptions``: ``width``, ``height``, ``camera``
-    "overview" (default since 2026-11-25: arm, objects and goal in view) | "front" | "side").
+    "overview" (default since 2026-11-25: arm, objects and goal in view) | "front" | "side" |
+    "wrist"), ``observation`` (``ObservationOptions``: ``obs_mode`` "state" (default) | "rgb" |
+    "rgbd" | "state+rgb", ``cameras``, ``image_width``, ``image_height``, ``shadows``;
+    docs/envs.md).
 
     ## Version history
     - v0: initial release. 2026-11-24: ``controller_preset`` added; the controller's default
@@ -75,6 +85,8 @@ class HammerEnv(ImpactEnv):
       ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
       ``ControllerConfig`` (replacing ``controller_config``).
       2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
+      2026-11-26: pixel observations (``observation=ObservationOptions(...)``) and a
+      ``"wrist"`` camera added; the default ``"state"`` mode is unchanged bit for bit.
     """
 
     @classmethod

@@ -1,4 +1,5 @@
-"""Grouped constructor options of the IMPACT envs: the simulated robot and rendering."""
+"""Grouped constructor options of the IMPACT envs: the simulated robot, rendering and
+observations."""
 
 from __future__ import annotations
 
@@ -18,6 +19,14 @@ def _real(name: str, value: object, low: float, high: float, unit: str) -> None:
             math.isfinite(float(value)) and low <= float(value) <= high):
         raise InvalidArgumentError(f"invalid {name} {value!r}; valid: a number from {low:g} to "
                                    f"{high:g}{unit}")
+
+
+def _pixels(name: str, value: object) -> None:
+    """One-line error unless ``value`` is an integer image size from 1 to MAX_RENDER_PX."""
+    if isinstance(value, bool) or not isinstance(value, Integral) or not (
+            1 <= value <= MAX_RENDER_PX):
+        raise InvalidArgumentError(
+            f"invalid {name} {value!r}; valid: an integer from 1 to {MAX_RENDER_PX} px")
 
 
 @dataclass(frozen=True)
@@ -45,8 +54,8 @@ class RobotOptions:
 @dataclass(frozen=True)
 class RenderOptions:
     """Offscreen rendering (``render_mode="rgb_array"``): image size [px] and camera name
-    (``"overview"``, which frames the arm, the objects and the goal, ``"front"`` or ``"side"``;
-    defined in assets/common.xml)."""
+    (``"overview"``, which frames the arm, the objects and the goal, ``"front"`` or ``"side"``,
+    defined in assets/common.xml, or ``"wrist"`` on the hand, assets/fr3_hand.xml)."""
 
     width: int = 320
     height: int = 240
@@ -54,13 +63,56 @@ class RenderOptions:
 
     def __post_init__(self) -> None:
         for name in ("width", "height"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, Integral) or not (
-                    1 <= value <= MAX_RENDER_PX):
-                raise InvalidArgumentError(
-                    f"invalid render {name} {value!r}; valid: an integer from 1 to "
-                    f"{MAX_RENDER_PX} px")
+            _pixels(f"render {name}", getattr(self, name))
         if not isinstance(self.camera, str) or not self.camera:
             raise InvalidArgumentError(
                 f"invalid camera {self.camera!r}; valid: a camera name of the scene, e.g. "
                 "'overview', 'front', 'side'")
+
+
+OBS_MODES = ("state", "rgb", "rgbd", "state+rgb")
+"""``"state"``: the robot's and the task's entries (default); ``"rgb"``: the robot's own
+entries (and task entries a camera cannot replace) plus one RGB image per camera;
+``"rgbd"``: as ``"rgb"`` plus one depth image per camera; ``"state+rgb"``: every state entry
+plus the RGB images (privileged, e.g. for an asymmetric critic). docs/envs.md."""
+
+
+@dataclass(frozen=True)
+class ObservationOptions:
+    """What the policy observes (``gym.make(id, observation=ObservationOptions(...))``).
+
+    Attributes:
+        obs_mode: One of ``OBS_MODES``.
+        cameras: Camera names rendered in the image modes, one image per camera and mode
+            (``"overview"``, ``"front"``, ``"side"`` in assets/common.xml, ``"wrist"`` on the
+            hand in assets/fr3_hand.xml); ignored in ``"state"`` mode.
+        image_width, image_height: Image size [px] (at most the scene's 640x480 buffer).
+        shadows: Draw shadows (as ``render()`` does). On a CPU renderer they are most of the
+            cost of an image (``impact-bench --pixels``, docs/envs.md).
+    """
+
+    obs_mode: str = "state"
+    cameras: tuple[str, ...] = ("overview", "wrist")
+    image_width: int = 96
+    image_height: int = 96
+    shadows: bool = True
+
+    def __post_init__(self) -> None:
+        if self.obs_mode not in OBS_MODES:
+            raise InvalidArgumentError(
+                f"invalid obs_mode {self.obs_mode!r}; valid choices: {', '.join(OBS_MODES)}")
+        cams = self.cameras
+        if (not isinstance(cams, tuple) or not cams or len(set(cams)) != len(cams)
+                or not all(isinstance(c, str) and c for c in cams)):
+            raise InvalidArgumentError(
+                f"invalid cameras {cams!r}; valid: a tuple of distinct camera names, e.g. "
+                "('overview', 'side', 'wrist')")
+        for name in ("image_width", "image_height"):
+            _pixels(name, getattr(self, name))
+        if not isinstance(self.shadows, bool):
+            raise InvalidArgumentError(f"invalid shadows {self.shadows!r}; valid: True or False")
+
+    @property
+    def uses_images(self) -> bool:
+        """Whether the observation holds camera images (every mode but ``"state"``)."""
+        return self.obs_mode != "state"

@@ -143,6 +143,10 @@ class Task(ABC):
     observations: ClassVar[tuple[ObsEntry, ...]]
     """The task's observation entries (after the robot's, ``envs/base.ROBOT_OBSERVATIONS``);
     ``observation()`` returns exactly these keys."""
+    privileged_observations: ClassVar[tuple[str, ...] | None] = None
+    """Names of the task entries that a camera and the robot's own sensors cannot give
+    (object poses, goals shown in the scene): the image observation modes leave them out
+    (``envs/pixels.py``). None: every task entry."""
     env_entry_point: ClassVar[str | None] = None
     """"module:Class" of an ``ImpactEnv`` subclass documenting this task; None registers the
     generic ``ImpactEnv`` with this task."""

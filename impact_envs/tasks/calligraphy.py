@@ -82,6 +82,9 @@ class CalligraphyTask(Task):
         ObsEntry("goal_pos", 3, -2.0, 2.0, "m",
                  "pen-tip reference at the end of the coming policy step"),
     )
+    privileged_observations = ("object_pos", "object_rot6d")
+    """The pen's pose is hidden in the image modes; ``goal_pos`` stays: it is the command of
+    what to write (no camera sees a character before it is written)."""
 
     name = "calligraphy"
     scene_xml = "calligraphy_scene.xml"

@@ -100,6 +100,7 @@ class DisturbanceTask(Task):
     env_id = "IMPACT/Disturbance-v0"
     env_entry_point = "impact_envs.envs.disturbance:DisturbanceEnv"
     observations = (*OBJECT_POSE, ObsEntry("goal_pos", 3, -2.0, 2.0, "m", "hold goal"))
+    privileged_observations = ("object_pos", "object_rot6d", "goal_pos")
 
     name = "disturbance"
     scene_xml = "disturbance_scene.xml"

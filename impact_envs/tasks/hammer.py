@@ -36,6 +36,7 @@ class HammerTask(Task):
     object_bodies = ("hammer",)
     params = (TaskParam("object_mass", 0.2, 0.05, 12.0, "kg"),)
     observations = (*OBJECT_POSE, ObsEntry("goal_pos", 3, -2.0, 2.0, "m", "basket centre"))
+    privileged_observations = ("object_pos", "object_rot6d", "goal_pos")
     max_episode_steps = 750
     workspace_low = np.array([0.15, -0.45, 0.0])
     workspace_high = np.array([0.70, 0.45, 0.60])
