@@ -35,6 +35,7 @@ from impact_envs.control.presets import PRESETS
 from impact_envs.errors import ImpactError
 from impact_franka import session
 from impact_franka.fci import TORQUE_SOURCES
+from impact_franka.runner import BUDGET_S
 
 REALTIME = ("ignore", "enforce")
 MODELS = ("pinocchio", "franka")
@@ -84,6 +85,9 @@ def _add_run_arguments(p: argparse.ArgumentParser) -> None:
                    "and gravity)")
     p.add_argument("--out", type=Path, default=None,
                    help="write DIR/ticks.csv (one row per tick) and DIR/run.json")
+    p.add_argument("--budget-ms", type=float, default=1e3 * BUDGET_S,
+                   help="per-tick compute budget [ms]: over it on 3 ticks in a row, the loop "
+                   "ramps out and stops (keep the default on a robot)")
 
 
 def _add_pick_place_arguments(p: argparse.ArgumentParser) -> None:
@@ -136,7 +140,8 @@ def _run_connected(args: argparse.Namespace) -> int:
         step_m = getattr(args, "step_m", None)
         step = None if step_m is None else TargetStep(np.array(step_m), args.step_at_s)
         report = hold(robot, controller, args.seconds, float_only=args.command == "check",
-                      torque_source=args.torque_source, step=step)
+                      torque_source=args.torque_source, step=step,
+                      budget_s=1e-3 * getattr(args, "budget_ms", 1e3 * BUDGET_S))
     session.print_report(report)
     if report.stopped_by_signal:
         print("  stopped early on SIGINT/SIGTERM (ramped out, then finished the motion)")
@@ -208,7 +213,7 @@ def _pick_place(args: argparse.Namespace, robot: object,
     source = PickPlaceTarget(plan, gripper)
     gripper.open()  # a wrong gripper host is one line, before any motion
     report = run_loop(robot, controller, args.seconds, source,  # type: ignore[arg-type]
-                      torque_source=args.torque_source)
+                      torque_source=args.torque_source, budget_s=1e-3 * args.budget_ms)
     for r in source.records:
         verdict = "ok" if r.ok else "FAILED" if r.name in GRIPPER_STEPS else "short"
         print(f"  {r.name:13s} {r.t_start_s:6.2f}-{r.t_end_s:6.2f} s  {verdict:6s} {r.detail}")

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing as mp
+import os
 from typing import Any, NamedTuple
 
 from impact_franka.fci import FrankaError
@@ -44,10 +45,15 @@ class GripperReply(NamedTuple):
     message: str = ""
 
 
+CHILD_NICE = 10
+"""The hand's and the policy's processes yield the CPU to the 1 kHz loop (``os.nice``)."""
+
+
 def _child(conn: Any, host: str) -> None:
     """Connect, say so (or why not), then answer commands until None."""
     import pylibfranka as plf
 
+    os.nice(CHILD_NICE)
     try:
         gripper = plf.Gripper(host)
     except Exception as exc:  # noqa: BLE001 - pylibfranka raises RuntimeError subclasses

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing as mp
+import os
 from collections.abc import Callable
 from typing import Any
 
@@ -34,6 +35,7 @@ import numpy as np
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.rates import POLICY_HZ
 from impact_franka.fci import FciReading, FrankaError
+from impact_franka.gripper import CHILD_NICE
 
 START_TIMEOUT_S = 120.0
 """Longest wait for the child to build its policy (imports, checkpoint loading)."""
@@ -44,6 +46,7 @@ def _child(conn: Any, make_policy: Callable[[], Any], extra_obs: Callable[[], di
     """The policy process: build, answer observations with actions, drive the gripper."""
     from impact_envs.policies.interface import stack_obs
 
+    os.nice(CHILD_NICE)  # the loop wins the CPU over inference
     policy = make_policy()
     policy.reset(1)
     gripper, closed = None, None

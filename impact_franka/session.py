@@ -43,6 +43,9 @@ def check_args(args: argparse.Namespace) -> None:
         raise ImpactError(f"invalid --float-seconds {args.float_seconds!r}; valid: >= 0")
     if args.command == "pick-place":
         _check_pick_place(args)
+    budget = getattr(args, "budget_ms", 0.8)
+    if not 0.05 <= budget <= 10.0:
+        raise ImpactError(f"invalid --budget-ms {budget!r}; valid: 0.05 to 10")
     if not 0.0 <= args.max_payload_kg <= 20.0:
         raise ImpactError(f"invalid --max-payload-kg {args.max_payload_kg!r}; valid: 0 to 20")
     out = getattr(args, "out", None)

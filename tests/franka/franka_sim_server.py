@@ -6,9 +6,11 @@ loopback only, offline, on this project's FR3 + hand model (``FR3_MJCF``, no gri
 server), with ``enforce_comm_constraints`` and ``enforce_motion_limits`` (missed cycles and
 torque-rate or limit violations abort the motion, as on the robot). SIGTERM stops it.
 
-``--no-joint-friction``: the arm's joints without the Coulomb friction (``frictionloss``) of
-our model; franka-sim's ``tau_J`` echoes the command, so the controller cannot tell friction
-from an external force, which a real FR3's link-side torque sensors can.
+``--gripper``: franka-sim's gripper server on port 1338 as well (the hand's fingers of our
+model; no graspable object). ``--no-joint-friction``: the arm's joints without the Coulomb
+friction (``frictionloss``) of our model; franka-sim's ``tau_J`` echoes the command, so the
+controller cannot tell friction from an external force, which a real FR3's link-side torque
+sensors can.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ def main() -> None:
 
         MujocoFrankaSim._configure_model = frictionless
 
-    server = FrankaSimServer(host="127.0.0.1", enable_gripper=False,
+    server = FrankaSimServer(host="127.0.0.1", enable_gripper="--gripper" in sys.argv[1:],
                              enforce_comm_constraints=True, enforce_motion_limits=True)
     signal.signal(signal.SIGTERM, lambda *_: server.stop())
     signal.signal(signal.SIGINT, lambda *_: server.stop())

@@ -15,7 +15,7 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 import pytest
-from franka_servers import franky_scene, simulator_python
+from franka_servers import HERE, franky_scene, serving, simulator_python
 
 from impact_franka.fci import FrankaError
 from impact_franka.gripper import GripperCommand, GripperReply
@@ -85,7 +85,11 @@ def test_a_push_is_taken_up(tmp_path) -> None:
 def test_pick_place_carries_an_undeclared_dumbbell(tmp_path) -> None:
     """The paper's dumbbell task: a 2 kg cylinder (franky_scene_server's pick-and-place
     scene) picked from the table, carried 30 cm and set down, the hand through pylibfranka's
-    ``Gripper`` (franky-sim's gripper server on :1338), the load never declared."""
+    ``Gripper`` (franky-sim's gripper server on :1338), the load never declared. The budget
+    is 3 ms here: against franky-sim on 2 shared cores single ticks of 1-7 ms appear at the
+    step transitions (measured; 1 in about 6 runs tripped 0.8 ms three times in a row);
+    test_pick_place_under_franka_sim_s_checks keeps the default under the robot's own
+    timing checks."""
     from impact_franka.cli import main
 
     log = tmp_path / "object.jsonl"
@@ -96,8 +100,8 @@ def test_pick_place_carries_an_undeclared_dumbbell(tmp_path) -> None:
         start = json.loads(log.read_text().splitlines()[-1])["pos_m"]
         status = main(["pick-place", "--host", host, "--pick", "0.55,-0.15,0.36", "--place",
                        "0.55,0.15,0.362", "--grasp-width-m", "0", "--grasp-epsilon-m", "0.05",
-                       "--max-payload-kg", "2", "--seconds", "40", "--out",
-                       str(tmp_path / "run")])
+                       "--max-payload-kg", "2", "--seconds", "40", "--budget-ms", "3",
+                       "--out", str(tmp_path / "run")])
         time.sleep(0.5)  # the object settles; the log catches up
         end = json.loads(log.read_text().splitlines()[-1])["pos_m"]
     assert status == 0
@@ -108,6 +112,25 @@ def test_pick_place_carries_an_undeclared_dumbbell(tmp_path) -> None:
     assert np.linalg.norm(np.subtract(end[:2], [0.55, 0.15])) < 0.015  # on the place spot
     assert abs(end[2] - 0.35) < 3e-3  # standing on the table
     assert run["report"]["stop_reason"] == ""
+
+
+def test_pick_place_under_franka_sim_s_checks(tmp_path) -> None:
+    """The same sequence (no object: franka-sim has none) under franka-sim's communication
+    and motion-limit checks, with its gripper server and the default 0.8 ms budget: no
+    reflex, every step done."""
+    from impact_franka.cli import main
+
+    python = simulator_python("IMPACT_FRANKA_SIM_PYTHON")
+    with serving([python, str(HERE / "franka_sim_server.py"), "--gripper",
+                  "--no-joint-friction"]) as host:
+        status = main(["pick-place", "--host", host, "--torque-source", "tau_J+g", "--pick",
+                       "0.55,-0.15,0.36", "--place", "0.55,0.15,0.362", "--grasp-width-m",
+                       "0", "--grasp-epsilon-m", "0.05", "--out", str(tmp_path / "run")])
+    assert status == 0
+    run = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert run["pick_place"]["finished"] and run["report"]["robot_errors"] == ""
+    assert [s["name"] for s in run["pick_place"]["steps"]][-1] == "retreat"
+    assert run["report"]["command_success_rate_min"] >= 0.9  # measured 0.990
 
 
 def test_teach_records_the_tcp_pose_and_pick_place_reads_it(tmp_path, capsys) -> None:
