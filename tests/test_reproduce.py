@@ -7,6 +7,7 @@ results directory of the test's own (``--results``).
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -16,15 +17,21 @@ SWEEP = ["--env", ENV_ID, "--method", "fake_fast,fake_slow", "--masses", "0.5,1,
          "--episodes", "3", "--workers", "2", "--envs-per-worker", "2"]
 
 
-@pytest.fixture()
-def results(tmp_path: Path) -> Path:
-    """A results directory with one recorded table, ``fake``."""
-    root = tmp_path / "results"
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A results directory with one recorded table, ``fake`` (swept once per module)."""
+    root = tmp_path_factory.mktemp("recorded") / "results"
     done = run_cli(*SWEEP, "--out", str(root / "fake"))
     assert done.returncode == 0, done.stderr
     rec = run_cli("reproduce", "--record", "fake", "--results", str(root))
     assert rec.returncode == 0, rec.stderr
     return root
+
+
+@pytest.fixture()
+def results(recorded: Path, tmp_path: Path) -> Path:
+    """A copy of ``recorded`` of the test's own (tests change files in it)."""
+    return Path(shutil.copytree(recorded, tmp_path / "results"))
 
 
 def reproduce(results: Path, *args: str):
