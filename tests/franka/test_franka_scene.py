@@ -251,3 +251,13 @@ def test_bad_pick_place_arguments_are_one_line_before_connecting(argv, message,
     assert main(args) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
+
+
+def test_a_missing_extra_is_one_line(monkeypatch, capsys) -> None:
+    """Without pylibfranka (the extra ``[franka]`` not installed): one line saying how."""
+    from impact_franka.cli import main
+
+    monkeypatch.setitem(sys.modules, "pylibfranka", None)  # import fails as if absent
+    assert main(["check", "--host", "127.0.0.1"]) == 1
+    err = capsys.readouterr().err
+    assert err == "impact-robot: impact-robot needs pylibfranka: pip install -e '.[franka]'\n"
