@@ -27,7 +27,6 @@ from hypothesis.extra import numpy as hnp
 from impact_envs.control import kernels
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import INPUT_ABS_MAX, ImpactController
-from impact_envs.control.kernels import limiter_views
 from impact_envs.control.lie import matrix_to_quat
 from impact_envs.errors import InvalidArgumentError
 from impact_franka.fci import fr3_config
@@ -118,24 +117,20 @@ def _refused(kwargs: dict) -> bool:
     return not math.sqrt(w0 * w0 + x * x + y * y + z * z) > 1e-12
 
 
-def _state(ctrl: ImpactController) -> list[np.ndarray]:
-    """Every array that carries the controller's state from tick to tick, copied."""
+def _state(ctrl: ImpactController) -> dict[str, np.ndarray]:
+    """Every array that carries the controller's state from tick to tick, copied, by name."""
     im = ctrl.internal_model
-    learner = [part for value in im.learner for part in
-               (value if isinstance(value, tuple) else (value,))]
-    arrays = [ctrl.buffer, ctrl.estimator.buffer, ctrl.slow_filter.buffer,
-              ctrl.impedance.buffer, ctrl.limiter.buffer, im.buffer, im.kernel_args()[0],
-              *im.kernel_args()[1], *im.kernel_args()[2], ctrl.guard.buffer, *learner]
-    return [a.copy() for a in arrays] + [np.array([im.replay.count, im.n_updates])]
+    return {**{k: a.copy() for k, a in ctrl.state_arrays().items()},
+            "counts": np.array([im.replay.count, im.n_updates])}
 
 
-def _check_limits(ctrl: ImpactController, out: np.ndarray, before: np.ndarray) -> None:
+def _check_limits(ctrl: ImpactController, out: np.ndarray, before: dict) -> None:
     """Finite, saturated to tau_max, and (unless a joint sits at its limit, the documented
     re-synchronisation case of TorqueLimiter) no more than the rate bound per tick."""
     tau_max = ctrl.limiter.tau_max
     assert np.all(np.isfinite(out))
     assert np.all(np.abs(out) <= tau_max + 1e-9)
-    step = np.abs(limiter_views(ctrl.limiter.buffer)[2] - limiter_views(before)[2])
+    step = np.abs(ctrl.limiter.state.last_no_gravity - before["lim.last_no_gravity"])
     free = np.abs(out) < tau_max - 1e-9
     assert np.all(step[free] <= ctrl.limiter.max_delta_nm + 1e-9)
 
@@ -154,12 +149,13 @@ def test_compute_refuses_or_returns_limited_finite_torques(mode, ticks) -> None:
             if refused:
                 with pytest.raises(InvalidArgumentError):
                     ctrl.compute(**kwargs)
-                for a, b in zip(before, _state(ctrl), strict=True):
-                    np.testing.assert_array_equal(a, b)
+                after = _state(ctrl)
+                for name, a in before.items():
+                    np.testing.assert_array_equal(a, after[name], err_msg=name)
                 event("tick refused")
                 break
             out = ctrl.compute(**kwargs)
-            _check_limits(ctrl, out, before[4])
+            _check_limits(ctrl, out, before)
             event("tick accepted")
         event(f"torques saturated: {bool(np.any(np.abs(ctrl.signals.tau_cmd) >= 12.0))}")
     im = ctrl.internal_model

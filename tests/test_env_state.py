@@ -74,15 +74,16 @@ def _cut_weight(state):
 
 
 def _cut_array(state):
-    state.arrays["controller"] = state.arrays["controller"][:-1]
+    state.arrays["controller.ctl"] = state.arrays["controller.ctl"][:-1]
 
 
 def _drop_array(state):
-    del state.arrays["estimator"]
+    del state.arrays["controller.est"]
 
 
 def _float32_array(state):
-    state.arrays["impedance"] = state.arrays["impedance"].astype(np.float32)
+    name = "controller.imp.pose_error"
+    state.arrays[name] = state.arrays[name].astype(np.float32)
 
 
 def _no_identity(state):
@@ -135,3 +136,50 @@ def test_a_foreign_or_damaged_state_is_refused_and_changes_nothing(case):
     for name in ("body_mass", "body_pos", "body_inertia", "geom_size"):
         assert np.array_equal(getattr(before.model, name), getattr(after.model, name))
     assert np.array_equal(before.data.qpos, after.data.qpos)
+
+
+def _stage_objects(ctrl: object) -> list[tuple[str, object]]:
+    """The controller and every object of impact_envs.control it holds, two levels deep."""
+    found, todo = [("controller", ctrl)], [("controller", ctrl)]
+    while todo:
+        path, obj = todo.pop()
+        for name, value in vars(obj).items():
+            if type(value).__module__.startswith("impact_envs.control") and hasattr(
+                    value, "__dict__") and path.count(".") < 2:
+                found.append((f"{path}.{name}", value))
+                todo.append((f"{path}.{name}", value))
+    return found
+
+
+def _hidden_arrays(ctrl: object) -> list[str]:
+    """Arrays of the controller's stages outside its named state and not declared
+    ``STATELESS`` by their class."""
+    live = list(ctrl.state_arrays().values())
+    return [f"{path}.{name}" for path, obj in _stage_objects(ctrl)
+            for name, value in vars(obj).items()
+            if isinstance(value, np.ndarray) and value.size
+            and name not in getattr(type(obj), "STATELESS", ())
+            and not any(np.shares_memory(value, a) for a in live)]
+
+
+@pytest.mark.parametrize("preset", ["default", "paper"])
+def test_every_array_a_stage_keeps_is_in_the_snapshot_or_declared_stateless(preset):
+    """A stage that keeps state outside ``kernels.ControllerState`` fails here, not silently
+    in get_state / set_state: each of its arrays must share memory with a snapshot array or
+    be named in its class's ``STATELESS``."""
+    env = gym.make("IMPACT/Hammer-v0", controller="impact", controller_preset=preset)
+    hidden = _hidden_arrays(env.unwrapped.controller)
+    assert not hidden, f"arrays outside the controller's named state: {hidden}"
+    env.close()
+
+
+def test_a_stage_added_without_its_state_is_caught():
+    """Negative control: a second slow filter hung on the controller but not wired into
+    ``kernel_state()`` is reported by the check above."""
+    from impact_envs.control.slow_filter import SlowWrenchFilter
+
+    env = gym.make("IMPACT/Hammer-v0", controller="impact")
+    ctrl = env.unwrapped.controller
+    ctrl.extra_filter = SlowWrenchFilter(ctrl.config.slow_wrench, ctrl.config.dt_s)
+    assert any(h.startswith("controller.extra_filter.") for h in _hidden_arrays(ctrl))
+    env.close()

@@ -8,7 +8,9 @@ the estimator and slow filter (their signals exist) but skips the internal model
 
 from __future__ import annotations
 
-from typing import Literal
+import copy
+from collections.abc import Iterator
+from typing import Any, Literal
 
 import numpy as np
 import torch
@@ -80,6 +82,18 @@ def describe_bad_input(q: np.ndarray, dq: np.ndarray, tau_measured: np.ndarray,
             + (f" {unit}" if unit else ""))
 
 
+def named_arrays(prefix: str, value: object) -> Iterator[tuple[str, np.ndarray]]:
+    """Every array in ``value`` (an array, a NamedTuple or tuple of them, nested), by dotted
+    name: a NamedTuple field by its name, a plain tuple's item by its index. Scalars and
+    None are skipped (no state)."""
+    if isinstance(value, np.ndarray):
+        yield prefix, value
+    elif isinstance(value, tuple):
+        names = getattr(value, "_fields", range(len(value)))
+        for name, item in zip(names, value, strict=True):
+            yield from named_arrays(f"{prefix}.{name}" if prefix else str(name), item)
+
+
 class ImpactController:
     """Torque controller of the IMPACT paper for a 7-DoF arm.
 
@@ -98,6 +112,11 @@ class ImpactController:
         internal_model: The learned wrench predictor (``save``/``load`` via safetensors).
         signals: ``ControllerSignals`` of the last tick.
     """
+
+    STATELESS: tuple[str, ...] = ("_zeros6", "_zeros7")
+    """Array attributes that carry nothing from one tick to the next (constants). Every
+    other array of the controller and of its stages must be part of ``kernel_state()``
+    (tests/test_env_state.py checks it), so snapshots stay complete as stages are added."""
 
     def __init__(
         self,
@@ -246,9 +265,27 @@ class ImpactController:
         model32, weights, biases, model, learner = self.internal_model.kernel_args()
         return kernels.ControllerState(
             ctl=self.buffer, grams=self._grams, wrench_maps=self.wrench_maps,
-            est=self.estimator.buffer, sf=self.slow_filter.buffer, model32=model32,
+            est=self.estimator.buffer, sf=self.slow_filter.state, model32=model32,
             weights=weights, biases=biases, model=model, learner=learner,
-            guard=self.guard.buffer, imp=self.impedance.buffer, lim=self.limiter.buffer)
+            guard=self.guard.buffer, imp=self.impedance.state, lim=self.limiter.state)
+
+    def state_arrays(self) -> dict[str, np.ndarray]:
+        """Every array that carries this controller from one tick to the next, by name, live
+        (the kernel's own buffers): ``kernel_state()`` walked generically (``named_arrays``),
+        so a stage whose state is a field of ``kernels.ControllerState`` is in every
+        snapshot (``ImpactEnv.get_state``) with no code of its own."""
+        return dict(named_arrays("", self.kernel_state()))
+
+    def python_state(self) -> dict[str, Any]:
+        """The controller's state that is not an array, as copies (``load_python_state``)."""
+        return {"is_reset": self._is_reset, **self.internal_model.python_state()}
+
+    def load_python_state(self, state: dict[str, Any]) -> None:
+        """Set what ``python_state`` returned (copied) and refresh ``signals``."""
+        state = copy.deepcopy(state)
+        self._is_reset = bool(state.pop("is_reset"))
+        self.internal_model.load_python_state(state)
+        self._fill_signals()
 
     def loop_inputs(self, wrench_cmd_world: np.ndarray | None = None,
                     learn_mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
-from impact_envs.control.kernel_layout import _next
 from impact_envs.control.kernel_math import mat_t_vec, mat_vec, orientation_error
 from impact_envs.control.lie import invalid_quaternion
 from impact_envs.control.validation import check_len, check_positive
@@ -83,75 +83,115 @@ class ImpedanceConfig:
         return self.nullspace_damping_nms_per_rad
 
 
-# ---------------------------------------------------------------- buffer layout and kernel
-def impedance_size(n: int) -> int:
-    """Length of an impedance buffer for ``n`` joints (see ``impedance_views``)."""
-    return 46 + 5 * n
+# ------------------------------------------------------------------ named state and kernel
+class ImpedanceParams(NamedTuple):
+    """The law's gains, fixed at construction (``make_impedance_state``).
 
-
-@njit(cache=True)
-def impedance_views(buf):
-    """(par, k_q_null, e, twist, w_imp, tau0, w_null, w, tau_coriolis, tau_gravity, out).
-
-    par = [K (6), D (6), k_n, d_n, gravity on, Coriolis on]; e = pose error; out = torque
-    without gravity.
+    Attributes:
+        stiffness: Diagonal of K (6,) [N/m; Nm/rad], world frame.
+        damping: Diagonal of D (6,) [N s/m; Nm s/rad].
+        k_null: Null-space joint stiffness k_n [Nm/rad].
+        d_null: Null-space joint damping d_n [Nm s/rad].
+        compensate_gravity: Whether ``tau_gravity`` is filled with g(q).
+        compensate_coriolis: Whether C(q, dq) dq is added.
     """
-    n = (buf.shape[0] - 46) // 5
-    par, o = _next(buf, 0, 16)
-    k_q_null, o = _next(buf, o, n)
-    e, o = _next(buf, o, 6)
-    twist, o = _next(buf, o, 6)
-    w_imp, o = _next(buf, o, 6)
-    tau0, o = _next(buf, o, n)
-    w_null, o = _next(buf, o, 6)
-    w, o = _next(buf, o, 6)
-    tau_cor, o = _next(buf, o, n)
-    tau_grav, o = _next(buf, o, n)
-    out, o = _next(buf, o, n)
-    return par, k_q_null, e, twist, w_imp, tau0, w_null, w, tau_cor, tau_grav, out
+
+    stiffness: np.ndarray
+    damping: np.ndarray
+    k_null: float
+    d_null: float
+    compensate_gravity: bool
+    compensate_coriolis: bool
+
+
+class ImpedanceState(NamedTuple):
+    """Everything ``impedance_law`` reads and writes (numba takes it as one argument).
+
+    Attributes:
+        params: ``ImpedanceParams``.
+        q_null: Posture target of the null-space task (n,) [rad] (``set_posture``).
+        k_q_null: k_n q_null (n,) [Nm].
+        pose_error: e = [p_d - p (3) [m]; Log(R_d R^T) (3) [rad]], world frame.
+        twist: TCP velocity J dq (6,) [m/s, rad/s].
+        wrench_imp: K e - D J dq (6,) [N, Nm].
+        tau_posture: Unprojected posture torque tau_0 (n,) [Nm].
+        wrench_null: (J^+)^T tau_0 (6,) [N, Nm], removed by the projector.
+        wrench: w_imp - w_null + w_ff (6,) [N, Nm], mapped by J^T.
+        tau_coriolis: C dq (n,) [Nm] (zeros if disabled).
+        tau_gravity: g(q) (n,) [Nm] (zeros if disabled).
+        tau_no_gravity: Full command without gravity (n,) [Nm].
+    """
+
+    params: ImpedanceParams
+    q_null: np.ndarray
+    k_q_null: np.ndarray
+    pose_error: np.ndarray
+    twist: np.ndarray
+    wrench_imp: np.ndarray
+    tau_posture: np.ndarray
+    wrench_null: np.ndarray
+    wrench: np.ndarray
+    tau_coriolis: np.ndarray
+    tau_gravity: np.ndarray
+    tau_no_gravity: np.ndarray
+
+
+def make_impedance_state(config: ImpedanceConfig, n_joints: int = 7) -> ImpedanceState:
+    """A zeroed ``ImpedanceState`` with ``config``'s gains for ``n_joints`` joints."""
+    params = ImpedanceParams(
+        stiffness=np.array(config.stiffness_translational_n_per_m
+                           + config.stiffness_rotational_nm_per_rad, dtype=np.float64),
+        damping=np.array(config.damping_translational_ns_per_m
+                         + config.damping_rotational_nms_per_rad, dtype=np.float64),
+        k_null=float(config.nullspace_stiffness_nm_per_rad),
+        d_null=float(config.nullspace_damping),
+        compensate_gravity=bool(config.compensate_gravity),
+        compensate_coriolis=bool(config.compensate_coriolis))
+    n = n_joints
+    return ImpedanceState(params, np.zeros(n), np.zeros(n), np.zeros(6), np.zeros(6),
+                          np.zeros(6), np.zeros(n), np.zeros(6), np.zeros(6), np.zeros(n),
+                          np.zeros(n), np.zeros(n))
 
 
 @njit(cache=True)
-def impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map, wrench_ff, buf) -> bool:
+def impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map, wrench_ff, st) -> bool:
     """tau_no_gravity = J^T (K e - D J dq - W_n tau_0 + w_ff) + tau_0 + C dq (impedance.py).
 
-    dyn = (J, M, C, g, p_ee, R_ee); buf = impedance buffer. Returns False (nothing written) when
-    the target quaternion is invalid.
+    dyn = (J, M, C, g, p_ee, R_ee); st = ``ImpedanceState``. Returns False (nothing written)
+    when the target quaternion is invalid.
     """
     jac, _, cor, grav, pos_ee, rot_ee = dyn
-    par, k_q_null, e, twist, w_imp, tau0, w_null, w, tau_cor, tau_grav, out = (
-        impedance_views(buf)
-    )
+    par = st.params
+    e, tau0, out = st.pose_error, st.tau_posture, st.tau_no_gravity
     if not orientation_error(quat_target, rot_ee, e[3:]):
         return False
     for i in range(3):
         e[i] = pos_target[i] - pos_ee[i]
-    mat_vec(jac, dq, twist)
+    mat_vec(jac, dq, st.twist)
     for i in range(6):
-        w_imp[i] = par[i] * e[i] - par[6 + i] * twist[i]
-    k_null, d_null = par[12], par[13]
+        st.wrench_imp[i] = par.stiffness[i] * e[i] - par.damping[i] * st.twist[i]
     for j in range(tau0.shape[0]):
-        tau0[j] = q[j] * -k_null + k_q_null[j] - dq[j] * d_null
-    mat_vec(wrench_map, tau0, w_null)
+        tau0[j] = q[j] * -par.k_null + st.k_q_null[j] - dq[j] * par.d_null
+    mat_vec(wrench_map, tau0, st.wrench_null)
     for i in range(6):
-        w[i] = w_imp[i] - w_null[i] + wrench_ff[i]
-    mat_t_vec(jac, w, out)
-    if par[15] != 0.0:
-        mat_vec(cor, dq, tau_cor)
+        st.wrench[i] = st.wrench_imp[i] - st.wrench_null[i] + wrench_ff[i]
+    mat_t_vec(jac, st.wrench, out)
+    if par.compensate_coriolis:
+        mat_vec(cor, dq, st.tau_coriolis)
     for j in range(out.shape[0]):
         out[j] += tau0[j]
-        if par[15] != 0.0:
-            out[j] += tau_cor[j]
-        if par[14] != 0.0:
-            tau_grav[j] = grav[j]
+        if par.compensate_coriolis:
+            out[j] += st.tau_coriolis[j]
+        if par.compensate_gravity:
+            st.tau_gravity[j] = grav[j]
     return True
 
 
 class CartesianImpedance:
-    """Preallocated impedance law; all outputs are attributes overwritten every ``compute``.
+    """The impedance law as a typed object: ``state`` (``ImpedanceState``) and ``compute``.
 
-    The law itself is ``impedance_law`` (also run by ``kernels.controller_tick``); the
-    array attributes are views of ``buffer`` (layout: ``impedance_views``).
+    The law itself is ``impedance_law`` (also run by ``kernels.controller_tick``); the array
+    attributes below are the state's own arrays (written in place every tick).
 
     Attributes:
         pose_error: e = [p_d - p (3) [m]; Log(R_d R^T) (3) [rad]], world frame.
@@ -163,48 +203,29 @@ class CartesianImpedance:
         tau_gravity: g(q) (7,) [Nm] (zeros if disabled).
         tau_no_gravity: Full command without gravity (7,) [Nm].
         q_null: Posture target of the null-space task (7,) [rad].
+        stiffness, damping: Diagonals of K and D (6,).
     """
+
+    STATELESS: tuple[str, ...] = ("_zeros6",)
+    """Array attributes that carry nothing from one tick to the next (a constant)."""
 
     def __init__(self, config: ImpedanceConfig, n_joints: int = 7) -> None:
         """Create the law from ``config`` for an arm with ``n_joints`` joints."""
         self.config = config
-        self.k_null = config.nullspace_stiffness_nm_per_rad
-        self.d_null = config.nullspace_damping
-        self.buffer = np.zeros(impedance_size(n_joints))
-        (par, self._k_q_null, self.pose_error, self.twist_world, self.wrench_imp_world,
-         self.tau_posture, self.wrench_null_world, self._w, self.tau_coriolis, self.tau_gravity,
-         self.tau_no_gravity) = impedance_views(self.buffer)  # fmt: skip
-        par[:] = (
-            config.stiffness_translational_n_per_m
-            + config.stiffness_rotational_nm_per_rad
-            + config.damping_translational_ns_per_m
-            + config.damping_rotational_nms_per_rad
-            + (self.k_null, self.d_null)
-            + (float(config.compensate_gravity), float(config.compensate_coriolis))
-        )
-        self.stiffness, self.damping = par[:6], par[6:12]
-        self.q_null = np.zeros(n_joints)
+        self.state = st = make_impedance_state(config, n_joints)
+        self.k_null, self.d_null = st.params.k_null, st.params.d_null
+        self.stiffness, self.damping = st.params.stiffness, st.params.damping
+        self.pose_error, self.twist_world = st.pose_error, st.twist
+        self.wrench_imp_world, self.tau_posture = st.wrench_imp, st.tau_posture
+        self.wrench_null_world, self.tau_coriolis = st.wrench_null, st.tau_coriolis
+        self.tau_gravity, self.tau_no_gravity = st.tau_gravity, st.tau_no_gravity
+        self.q_null = st.q_null
         self._zeros6 = np.zeros(6)
 
     def set_posture(self, q_null: np.ndarray) -> None:
         """Set the null-space posture target q_null [rad] (the controller does it at reset)."""
         self.q_null[:] = q_null
-        np.multiply(self.q_null, self.k_null, out=self._k_q_null)
-
-    def compute_pose_error(
-        self,
-        pos_ee_world: np.ndarray,
-        rot_ee_world: np.ndarray,
-        pos_target_world: np.ndarray,
-        quat_target_world: np.ndarray,
-    ) -> np.ndarray:
-        """Fill and return ``pose_error`` = [p_d - p; Log(R_d R^T)] (6,) [m, rad]."""
-        quat = np.ascontiguousarray(quat_target_world, dtype=np.float64)
-        rot = np.ascontiguousarray(rot_ee_world, dtype=np.float64)
-        if not orientation_error(quat, rot, self.pose_error[3:]):
-            raise invalid_quaternion(quat_target_world)
-        np.subtract(pos_target_world, pos_ee_world, out=self.pose_error[:3])
-        return self.pose_error
+        np.multiply(self.q_null, self.k_null, out=self.state.k_q_null)
 
     def compute(
         self,
@@ -238,7 +259,7 @@ class CartesianImpedance:
         ok = impedance_law(
             dynamics_arrays(dynamics), np.asarray(q, f64), np.asarray(dq, f64),
             np.asarray(pos_target_world, f64), np.asarray(quat_target_world, f64),
-            np.asarray(wrench_map, f64), w_ff, self.buffer,
+            np.asarray(wrench_map, f64), w_ff, self.state,
         )  # fmt: skip
         if not ok:
             raise invalid_quaternion(quat_target_world)

@@ -28,7 +28,7 @@ from impact_envs.control.contact_guard import (
     guard_views,
 )
 from impact_envs.control.estimators import momentum_update, residual_update
-from impact_envs.control.impedance import impedance_law, impedance_views
+from impact_envs.control.impedance import ImpedanceState, impedance_law
 from impact_envs.control.internal_model.kernels import (
     model_gate_step,
     model_predict,
@@ -58,12 +58,12 @@ from impact_envs.control.kernel_layout import (
     controller_views,
 )
 from impact_envs.control.kernel_math import quat_normalized, regularized_wrench_map
-from impact_envs.control.limits import limiter_views, torque_limiter
-from impact_envs.control.slow_filter import slow_filter_update, slow_filter_views
+from impact_envs.control.limits import LimiterState, torque_limiter
+from impact_envs.control.slow_filter import SlowFilterState, slow_filter_update
 
 __all__ = [
     "BAD_INPUT", "BAD_QUAT", "DIVERGED", "NON_FINITE", "STORE", "TRAIN", "ControllerState",
-    "controller_tick", "first_bad_input", "limiter_views",
+    "controller_tick", "first_bad_input",
 ]
 
 
@@ -103,23 +103,24 @@ class ControllerState(NamedTuple):
 
     ``ctl``: the controller's own buffer (``controller_views``); ``grams`` / ``wrench_maps``
     (2, 6, 6) / (2, 6, 7): the estimator's and the null-space projector's solves (one when
-    shared); ``est``, ``sf``, ``imp``, ``lim``: estimator, slow filter, impedance and limiter
-    buffers; ``model32``, ``weights``, ``biases``, ``model``: the internal model's.
+    shared); ``est``: the estimator's buffer; ``sf``, ``imp``, ``lim``: the slow filter's,
+    the impedance law's and the limiter's named states; ``model32``,
+    ``weights``, ``biases``, ``model``: the internal model's.
     """
 
     ctl: np.ndarray
     grams: np.ndarray
     wrench_maps: np.ndarray
     est: np.ndarray
-    sf: np.ndarray
+    sf: SlowFilterState
     model32: np.ndarray
     weights: tuple
     biases: tuple
     model: np.ndarray
     learner: tuple
     guard: np.ndarray
-    imp: np.ndarray
-    lim: np.ndarray
+    imp: ImpedanceState
+    lim: LimiterState
 
 
 @njit(cache=True)
@@ -155,7 +156,7 @@ def controller_tick(
     if run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
         model_predict(model32, weights, biases, model)
-        contact_guard_step(pred, dyn.pos_ee_world, pos_target, slow_filter_views(sf)[4], mask,
+        contact_guard_step(pred, dyn.pos_ee_world, pos_target, sf.wrench_slow, mask,
                            guard)
         target = guard_views(guard)[2]  # w_slow; force axes held by the guard replaced
         flags = model_gate_step(target, slow_rate, mask, model)
@@ -174,21 +175,12 @@ def controller_tick(
         w_extra[i] = w_ff[i] + wrench_cmd[i]
     wrench_map_null = wrench_maps[0] if shared else wrench_maps[1]
     impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, w_extra, imp)
-    pose_error, tau_gravity, tau_no_gravity = _impedance_outputs(imp)
-    torque_limiter(tau_no_gravity, tau_gravity, lim)
-    _fill_scalars(pose_error, slow_rate, model, run_model, scalars)
-    for v in limiter_views(lim)[3]:
+    torque_limiter(imp.tau_no_gravity, imp.tau_gravity, lim)
+    _fill_scalars(imp.pose_error, slow_rate, model, run_model, scalars)
+    for v in lim.output:
         if not math.isfinite(v):
             flags |= NON_FINITE
     return flags
-
-
-@njit(cache=True)
-def _impedance_outputs(imp):
-    """(pose error, gravity torque, torque without gravity) of an impedance buffer."""
-    (_par, _k_q_null, pose_error, _twist, _w_imp, _tau0, _w_null, _w, _tau_cor, tau_gravity,
-     tau_no_gravity) = impedance_views(imp)
-    return pose_error, tau_gravity, tau_no_gravity
 
 
 @njit(cache=True)

@@ -13,11 +13,11 @@ period other than 1 ms. docs/controller.md, "Limits on the torque interface".
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from impact_envs.control.kernel_layout import _next
 from impact_envs.control.validation import check_len, check_positive
 from impact_envs.errors import check_choice
 
@@ -77,24 +77,48 @@ def beyond_hardware_limits(limits: LimitsConfig) -> list[str]:
     return above
 
 
-# ---------------------------------------------------------------- buffer layout and kernel
-def limiter_size(n: int) -> int:
-    """Length of a torque-limiter buffer for ``n`` joints."""
-    return 3 + 3 * n
+# ------------------------------------------------------------------ named state and kernel
+class LimiterParams(NamedTuple):
+    """The limiter's constants (``make_limiter_state``).
 
-
-@njit(cache=True)
-def limiter_views(buf):
-    """(par, tau_max, previous output without gravity, output).
-
-    par = [max change per tick [Nm], libfranka mode (0/1), max rate [Nm/s]].
+    Attributes:
+        max_delta_nm: Largest change of the command without gravity per tick [Nm] (the
+            ``"clip"`` limiter).
+        libfranka: Whether libfranka's ``limitRate`` is used instead of the per-tick clip.
+        max_rate_nm_per_s: Its rate bound [Nm/s].
+        tau_max: Saturation per joint (n,) [Nm].
     """
-    n = (buf.shape[0] - 3) // 3
-    par, o = _next(buf, 0, 3)
-    tau_max, o = _next(buf, o, n)
-    last, o = _next(buf, o, n)
-    out, o = _next(buf, o, n)
-    return par, tau_max, last, out
+
+    max_delta_nm: float
+    libfranka: bool
+    max_rate_nm_per_s: float
+    tau_max: np.ndarray
+
+
+class LimiterState(NamedTuple):
+    """Everything ``torque_limiter`` reads and writes.
+
+    Attributes:
+        params: ``LimiterParams``.
+        last_no_gravity: The previous output minus gravity (n,) [Nm]: what the rate bound is
+            measured from (libfranka's last ``tau_J_d``).
+        output: The command of the last tick (n,) [Nm].
+    """
+
+    params: LimiterParams
+    last_no_gravity: np.ndarray
+    output: np.ndarray
+
+
+def make_limiter_state(config: LimitsConfig, dt_s: float) -> LimiterState:
+    """A zeroed ``LimiterState`` for ``config`` at control period ``dt_s`` [s]."""
+    n = len(config.torque_max_nm)
+    params = LimiterParams(
+        max_delta_nm=float(config.torque_rate_max_nm_per_s * dt_s),
+        libfranka=config.rate_limiter == "libfranka",
+        max_rate_nm_per_s=float(config.torque_rate_max_nm_per_s),
+        tau_max=np.array(config.torque_max_nm, dtype=np.float64))
+    return LimiterState(params, np.zeros(n), np.zeros(n))
 
 
 @njit(cache=True)
@@ -130,59 +154,23 @@ def saturate_kernel(tau, tau_max, out) -> None:
 
 
 @njit(cache=True)
-def torque_limiter(tau_no_gravity, tau_gravity, buf) -> None:
+def torque_limiter(tau_no_gravity, tau_gravity, st) -> None:
     """Rate-limit without gravity, add gravity, saturate; remember output - gravity."""
-    par, tau_max, last, out = limiter_views(buf)
-    if par[1] != 0.0:
-        limit_rate_libfranka_kernel(tau_no_gravity, last, par[2], out)
+    par, last, out = st.params, st.last_no_gravity, st.output
+    if par.libfranka:
+        limit_rate_libfranka_kernel(tau_no_gravity, last, par.max_rate_nm_per_s, out)
     else:
-        limit_rate_kernel(tau_no_gravity, last, par[0], out)
+        limit_rate_kernel(tau_no_gravity, last, par.max_delta_nm, out)
     for j in range(out.shape[0]):
         out[j] += tau_gravity[j]
-    saturate_kernel(out, tau_max, out)
+    saturate_kernel(out, par.tau_max, out)
     for j in range(out.shape[0]):
         last[j] = out[j] - tau_gravity[j]
 
 
-def limit_rate(
-    tau_desired: np.ndarray,
-    tau_last: np.ndarray,
-    max_delta_nm: float,
-    out: np.ndarray | None = None,
-) -> np.ndarray:
-    """Clamp each joint's change per tick: |tau - tau_last| <= max_delta_nm.
-
-    Args:
-        tau_desired: Requested torque (7,) [Nm].
-        tau_last: Torque commanded on the previous tick (7,) [Nm].
-        max_delta_nm: Largest change per tick [Nm] (rate limit [Nm/s] times dt [s]).
-        out: Optional float64 output array (may alias ``tau_desired``).
-
-    Returns:
-        The rate-limited torque (7,) [Nm].
-    """
-    tau_desired = np.asarray(tau_desired, dtype=np.float64)
-    if out is None:
-        out = np.empty_like(tau_desired)
-    limit_rate_kernel(
-        tau_desired, np.asarray(tau_last, dtype=np.float64), float(max_delta_nm), out
-    )
-    return out
-
-
-def saturate(tau: np.ndarray, tau_max: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """Clamp each joint torque to [-tau_max, tau_max] [Nm]."""
-    tau = np.asarray(tau, dtype=np.float64)
-    if out is None:
-        out = np.empty_like(tau)
-    saturate_kernel(tau, np.asarray(tau_max, dtype=np.float64), out)
-    return out
-
-
 class TorqueLimiter:
-    """Stateful torque-rate limiter followed by saturation (``torque_limiter``).
-
-    ``tau_max`` and ``output`` are views of ``buffer`` (layout: ``limiter_views``).
+    """Stateful torque-rate limiter followed by saturation: ``state`` (``LimiterState``) and
+    ``apply`` over the kernel ``torque_limiter``.
 
     Like libfranka, the rate limit is applied to the torque *without* gravity (libfranka's
     ``tau_J_d`` excludes gravity, which the robot adds itself); gravity is then added and the
@@ -197,19 +185,16 @@ class TorqueLimiter:
             config: Limits.
             dt_s: Control period [s]; the per-tick bound is ``torque_rate_max_nm_per_s * dt_s``.
         """
-        self.buffer = np.zeros(limiter_size(len(config.torque_max_nm)))
-        par, self.tau_max, self._last_no_gravity, self.output = limiter_views(self.buffer)
-        self.tau_max[:] = config.torque_max_nm
-        self.max_delta_nm = config.torque_rate_max_nm_per_s * dt_s
-        par[:] = (self.max_delta_nm, float(config.rate_limiter == "libfranka"),
-                  config.torque_rate_max_nm_per_s)
+        self.state = st = make_limiter_state(config, dt_s)
+        self.tau_max, self.output = st.params.tau_max, st.output
+        self.max_delta_nm = st.params.max_delta_nm
 
     def reset(self, tau_no_gravity: np.ndarray | None = None) -> None:
         """Set the previously commanded torque without gravity (default 0) [Nm]."""
         if tau_no_gravity is None:
-            self._last_no_gravity.fill(0.0)
+            self.state.last_no_gravity.fill(0.0)
         else:
-            self._last_no_gravity[:] = tau_no_gravity
+            self.state.last_no_gravity[:] = tau_no_gravity
 
     def apply(self, tau_no_gravity: np.ndarray, tau_gravity: np.ndarray) -> np.ndarray:
         """Rate-limit ``tau_no_gravity``, add ``tau_gravity``, saturate.
@@ -224,6 +209,6 @@ class TorqueLimiter:
         torque_limiter(
             np.asarray(tau_no_gravity, dtype=np.float64),
             np.asarray(tau_gravity, dtype=np.float64),
-            self.buffer,
+            self.state,
         )
         return self.output

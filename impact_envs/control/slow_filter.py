@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from impact_envs.control.kernel_layout import _next
 from impact_envs.control.validation import check_positive
 
 
@@ -50,44 +50,70 @@ class SlowWrenchConfig:
         return self.rate_force_per_s * self.clip_force_n
 
 
-# ---------------------------------------------------------------- buffer layout and kernel
-SLOW_FILTER_SIZE = 32
-"""Length of a slow-filter buffer."""
+# ------------------------------------------------------------------ named state and kernel
+class SlowFilterParams(NamedTuple):
+    """The filter's constants (``make_slow_filter_state``).
+
+    Attributes:
+        eta_per_s: eta per axis (6,) [1/s].
+        gain: eta dt per axis (6,) [1 per tick].
+        clip: Clip c per axis (6,) [N, Nm].
+        inv_max_force_slew: 1 / (eta_f c_f) [s/N]: normalizes the slow rate.
+    """
+
+    eta_per_s: np.ndarray
+    gain: np.ndarray
+    clip: np.ndarray
+    inv_max_force_slew: float
+
+
+class SlowFilterState(NamedTuple):
+    """Everything ``slow_filter_update`` reads and writes.
+
+    Attributes:
+        params: ``SlowFilterParams``.
+        wrench_slow: w_slow (6,) [N, Nm], world frame.
+        rate: dw_slow/dt of the last update (6,) [N/s, Nm/s].
+        slow_rate: (1,) the dimensionless slow-wrench rate of the last update.
+    """
+
+    params: SlowFilterParams
+    wrench_slow: np.ndarray
+    rate: np.ndarray
+    slow_rate: np.ndarray
+
+
+def make_slow_filter_state(config: SlowWrenchConfig, dt_s: float) -> SlowFilterState:
+    """A zeroed ``SlowFilterState`` for ``config`` at control period ``dt_s`` [s]."""
+    f, t = config.rate_force_per_s, config.rate_torque_per_s
+    cf, ct = config.clip_force_n, config.clip_torque_nm
+    eta = np.array((f, f, f, t, t, t), dtype=np.float64)
+    params = SlowFilterParams(eta_per_s=eta, gain=eta * dt_s,
+                              clip=np.array((cf, cf, cf, ct, ct, ct), dtype=np.float64),
+                              inv_max_force_slew=1.0 / config.max_force_slew_n_per_s)
+    return SlowFilterState(params, np.zeros(6), np.zeros(6), np.zeros(1))
 
 
 @njit(cache=True)
-def slow_filter_views(buf):
-    """(par [1 / (eta_f c_f), slow_rate], eta, gain, clip, w_slow, rate)."""
-    par, o = _next(buf, 0, 2)
-    eta, o = _next(buf, o, 6)
-    gain, o = _next(buf, o, 6)
-    clip, o = _next(buf, o, 6)
-    w_slow, o = _next(buf, o, 6)
-    rate, o = _next(buf, o, 6)
-    return par, eta, gain, clip, w_slow, rate
-
-
-@njit(cache=True)
-def slow_filter_update(wrench_ext, buf) -> float:
+def slow_filter_update(wrench_ext, st) -> float:
     """w_slow += eta dt clip(w_ext - w_slow, -c, c); returns (and stores) the slow rate."""
-    par, eta, gain, clip, w_slow, rate = slow_filter_views(buf)
+    par, w_slow, rate = st.params, st.wrench_slow, st.rate
     for i in range(6):
         d = wrench_ext[i] - w_slow[i]
-        if d > clip[i]:
-            d = clip[i]
-        if d < -clip[i]:
-            d = -clip[i]
-        rate[i] = eta[i] * d
-        w_slow[i] += d * gain[i]
+        if d > par.clip[i]:
+            d = par.clip[i]
+        if d < -par.clip[i]:
+            d = -par.clip[i]
+        rate[i] = par.eta_per_s[i] * d
+        w_slow[i] += d * par.gain[i]
     fx, fy, fz = rate[0], rate[1], rate[2]
-    par[1] = math.sqrt(fx * fx + fy * fy + fz * fz) * par[0]
-    return par[1]
+    st.slow_rate[0] = math.sqrt(fx * fx + fy * fy + fz * fz) * par.inv_max_force_slew
+    return st.slow_rate[0]
 
 
 class SlowWrenchFilter:
-    """Per-axis clipped low-pass and slow-wrench rate (``slow_filter_update``).
-
-    The arrays are views of ``buffer`` (layout: ``slow_filter_views``).
+    """Per-axis clipped low-pass and slow-wrench rate: ``state`` (``SlowFilterState``) and
+    ``update`` over the kernel ``slow_filter_update``.
 
     Attributes:
         wrench_slow_world: w_slow (6,) [N, Nm], world frame, robot-on-environment sign.
@@ -101,21 +127,14 @@ class SlowWrenchFilter:
         """Create the filter for control period ``dt_s`` [s]."""
         self.config = config
         self.dt_s = dt_s
-        f, t = config.rate_force_per_s, config.rate_torque_per_s
-        cf, ct = config.clip_force_n, config.clip_torque_nm
-        self.buffer = np.zeros(SLOW_FILTER_SIZE)
-        views = slow_filter_views(self.buffer)
-        self._par = views[0]  # [1 / (eta_f c_f), slow_rate]
-        self.eta_per_s, self.gain, self.clip, self.wrench_slow_world, self.rate_world = views[1:]
-        self._par[0] = 1.0 / config.max_force_slew_n_per_s
-        self.eta_per_s[:] = (f, f, f, t, t, t)
-        self.gain[:] = self.eta_per_s * dt_s
-        self.clip[:] = (cf, cf, cf, ct, ct, ct)
+        self.state = st = make_slow_filter_state(config, dt_s)
+        self.eta_per_s, self.gain, self.clip = st.params[:3]
+        self.wrench_slow_world, self.rate_world = st.wrench_slow, st.rate
 
     @property
     def slow_rate(self) -> float:
         """Dimensionless slow-wrench rate of the last update (see the class docstring)."""
-        return float(self._par[1])
+        return float(self.state.slow_rate[0])
 
     def reset(self, wrench_slow_world: np.ndarray | None = None) -> None:
         """Set w_slow (default 0) and zero the rate."""
@@ -124,12 +143,12 @@ class SlowWrenchFilter:
         else:
             self.wrench_slow_world[:] = wrench_slow_world
         self.rate_world.fill(0.0)
-        self._par[1] = 0.0
+        self.state.slow_rate[0] = 0.0
 
     def update(self, wrench_ext_world: np.ndarray) -> np.ndarray:
         """Advance one tick toward ``wrench_ext_world`` (6,) and return w_slow (6,)."""
         w_ext = np.asarray(wrench_ext_world, dtype=np.float64)
-        slow_filter_update(w_ext, self.buffer)
+        slow_filter_update(w_ext, self.state)
         return self.wrench_slow_world
 
 

@@ -109,23 +109,11 @@ def _model_arrays(model: object) -> dict[str, np.ndarray]:
 
 
 def _live_arrays(env: ImpactEnv) -> dict[str, np.ndarray]:
-    """Every array (by name) whose contents carry state between ticks, as the live objects."""
-    ctrl, dyn, sim = env.controller, env.dynamics, env.sim
-    im = ctrl.internal_model
-    arrays = {
-        "controller": ctrl.buffer, "grams": ctrl._grams, "wrench_maps": ctrl.wrench_maps,
-        "estimator": ctrl.estimator.buffer, "slow_filter": ctrl.slow_filter.buffer,
-        "impedance": ctrl.impedance.buffer, "limiter": ctrl.limiter.buffer,
-        "guard": ctrl.guard.buffer,
-        "model32": im.kernel_args()[0], "model64": im.buffer,
-        "tau_bias": sim._tau_bias, "tau_applied": sim.tau_applied,
-        "q_model": dyn.q_model, "dq_model": dyn.dq_model,
-    }
-    for name, value in im.learner._asdict().items():  # replay ring, pending step, counters
-        parts = value if isinstance(value, tuple) else (value,)
-        arrays.update({f"learner_{name}_{i}": part for i, part in enumerate(parts)})
-    arrays.update({f"arm_{k}": v for k, v in dyn.model_arrays._asdict().items()})
-    return arrays
+    """Every array (by name) whose contents carry state between ticks, as the live objects:
+    what the controller, the simulator and the arm model each declare (``state_arrays``)."""
+    return {**{f"controller.{k}": v for k, v in env.controller.state_arrays().items()},
+            **{f"sim.{k}": v for k, v in env.sim.state_arrays().items()},
+            **{f"dynamics.{k}": v for k, v in env.dynamics.state_arrays().items()}}
 
 
 def _copy_model(dst: mujoco.MjModel, src: mujoco.MjModel) -> None:
@@ -143,8 +131,7 @@ def capture(env: ImpactEnv) -> EnvState:
         data=copy.deepcopy(env.sim.data),
         arrays={k: v.copy() for k, v in _live_arrays(env).items()},
         weights={k: v.detach().clone() for k, v in im.net.state_dict().items()},
-        learner={"replay_rng": copy.deepcopy(im.replay._rng),
-                 "n_divergences": im.n_divergences, "is_reset": env.controller._is_reset},
+        learner=env.controller.python_state(),
         task=copy.deepcopy(env.task.__dict__),
         env=copy.deepcopy({k: getattr(env, k, None) for k in ENV_FIELDS}),
         rng=copy.deepcopy(env.np_random),
@@ -168,11 +155,7 @@ def restore(env: ImpactEnv, state: EnvState) -> None:
     with torch.no_grad():
         for name, tensor in im.net.state_dict().items():
             tensor.copy_(state.weights[name])
-    learner = state.learner
-    im.replay._rng = copy.deepcopy(learner["replay_rng"])
-    im.n_divergences = learner["n_divergences"]
-    ctrl._is_reset = learner["is_reset"]
-    ctrl._fill_signals()
+    ctrl.load_python_state(state.learner)
     env.task.__dict__.update(copy.deepcopy(state.task))
     for key, value in copy.deepcopy(state.env).items():
         setattr(env, key, value)

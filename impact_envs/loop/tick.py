@@ -20,7 +20,6 @@ from impact_envs.control.kernels import (
     NON_FINITE,
     controller_tick,
     first_bad_input,
-    limiter_views,
 )
 from impact_envs.robot.chain_dynamics import chain_terms
 from impact_envs.robot.sim_kernels import actuate, sense
@@ -93,7 +92,7 @@ def loop_tick(i, friction, plan, sim, arm, dyn, state) -> int:
         flags = controller_tick(q, dq, tau, pos_target, quat_target, plan.wrench_cmd, plan.mask,
                                 width, plan.fric_model, dyn, state)
     if not flags & (BAD_INPUT | BAD_QUAT | NON_FINITE):
-        actuate(limiter_views(state.lim)[3], sim.torque_limits, sim.tau_applied, sim.ctrl,
+        actuate(state.lim.output, sim.torque_limits, sim.tau_applied, sim.ctrl,
                 sim.arm_act, sim.gripper_act, plan.gripper_cmd)
     for j in range(n):
         plan.taus[i, j] = sim.tau_applied[j]

@@ -126,6 +126,12 @@ class PinocchioArm:
         """The cached attributes as ``chain_terms`` writes them (the same arrays)."""
         self.joint_friction_is_zero = True  # see joint_friction: the sensor is link-side
 
+    def state_arrays(self) -> dict[str, np.ndarray]:
+        """Where the model was last evaluated and what it cached there, by name, live (a
+        restored controller reads them before its next ``update``)."""
+        return {"q_model": self.q_model, "dq_model": self.dq_model,
+                **{f"arm_{k}": v for k, v in self.model_arrays._asdict().items()}}
+
     def update(self, q: np.ndarray, dq: np.ndarray) -> None:
         """Recompute every cached quantity at joint positions ``q`` [rad], velocities ``dq``.
 

@@ -103,6 +103,12 @@ class FrankaSim:
         self.tau_applied = np.zeros(7)
         self._init_fast_paths()
 
+
+    def state_arrays(self) -> dict[str, np.ndarray]:
+        """The arrays besides ``model`` / ``data`` that carry the simulation from one step to
+        the next, by name, live (``ImpactEnv.get_state`` copies them)."""
+        return {"tau_bias": self._tau_bias, "tau_applied": self.tau_applied}
+
     def _init_fast_paths(self) -> None:
         """Buffers and ids of the per-tick helpers (friction rows, fingers, bound views)."""
         m = self.model

@@ -12,10 +12,12 @@ without copying.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -75,6 +77,11 @@ class InternalModel:
             re-initialises the model (seeded weights, empty replay), so a diverging learner
             can never feed a non-finite prediction forward.
     """
+
+    STATELESS: tuple[str, ...] = ("_inv_output_scale", "_ones", "_target", "_mask",
+                                  "_batch_x", "_batch_y", "_batch_m")
+    """Array attributes that carry nothing from one tick to the next: constants, and the
+    NumPy learner's per-call scratch (filled before every use)."""
 
     def __init__(self, config: InternalModelConfig | None = None) -> None:
         """Build the network (seeded) and all per-tick buffers."""
@@ -303,6 +310,17 @@ class InternalModel:
         return all(np.isfinite(a).all() for a in (*self._weights, *self._biases))
 
     # ----------------------------------------------------------------- persistence
+    def python_state(self) -> dict[str, Any]:
+        """What is not an array (copies): the replay sampler's generator and the divergence
+        count (the arrays are ``kernel_args()``, walked by ``ImpactController.state_arrays``)."""
+        return {"replay_rng": copy.deepcopy(self.replay.rng),
+                "n_divergences": self.n_divergences}
+
+    def load_python_state(self, state: dict[str, Any]) -> None:
+        """Set what ``python_state`` returned."""
+        self.replay.rng = copy.deepcopy(state["replay_rng"])
+        self.n_divergences = int(state["n_divergences"])
+
     def snapshot(self) -> ModelSnapshot:
         """A copy of what the model has learned: weights and replay samples."""
         replay = ReplayBuffer(self.replay.capacity, self.input_dim, 6, seed=self.config.seed)

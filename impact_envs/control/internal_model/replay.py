@@ -35,6 +35,15 @@ class ReplayBuffer:
         self._rng = np.random.default_rng(seed)
 
     @property
+    def rng(self) -> np.random.Generator:
+        """The generator of ``sample_indices`` (part of a snapshot's state)."""
+        return self._rng
+
+    @rng.setter
+    def rng(self, value: np.random.Generator) -> None:
+        self._rng = value
+
+    @property
     def count(self) -> int:
         """Number of valid samples."""
         return int(self._scal[COUNT])
