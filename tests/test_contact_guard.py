@@ -54,7 +54,7 @@ def test_bounds_limit_the_rate_and_size_of_the_feedforward() -> None:
     applied = []
     for _ in range(400):
         w = np.array([400.0, 0.0, -300.0, 0.0, 60.0, 0.0])
-        guard_feedforward(w, np.ones(6), guard.buffer)
+        guard_feedforward(w, np.ones(6), guard.state)
         applied.append(w.copy())
     applied = np.asarray(applied)
     steps = np.linalg.norm(np.diff(applied[:, :3], axis=0), axis=1)
@@ -71,7 +71,7 @@ def test_disabled_guard_changes_nothing() -> None:
     guard = ContactGuard(ContactGuardConfig(enabled=False), 0.001, 400.0)
     w = np.array([4000.0, 0.0, -3000.0, 0.0, 600.0, 0.0])
     before = w.copy()
-    guard_feedforward(w, np.ones(6), guard.buffer)
+    guard_feedforward(w, np.ones(6), guard.state)
     np.testing.assert_array_equal(w, before)
     assert ControllerConfig().guard == GUARD_ON  # default: on
     assert preset_config("paper").guard == ContactGuardConfig(enabled=False)  # paper: off
@@ -92,10 +92,10 @@ def _holding_guard() -> ContactGuard:
     guard = ContactGuard(GUARD_ON, 0.001, 400.0)
     ones, pos = np.ones(6), np.zeros(3)
     f0 = np.array([3.0, 0.0, -4.0, 0.0, 0.0, 0.0])
-    contact_guard_step(f0, pos, pos, f0, ones, guard.buffer)  # window at f0
+    contact_guard_step(f0, pos, pos, f0, ones, guard.state)  # window at f0
     pressed = f0 + np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0])
     for _ in range(150):  # grows 5 N down; the TCP stays; the estimate follows
-        contact_guard_step(pressed, pos, pos, pressed, ones, guard.buffer)
+        contact_guard_step(pressed, pos, pos, pressed, ones, guard.state)
     assert guard.holding
     return guard
 
@@ -104,13 +104,13 @@ def test_a_hold_drops_the_push_into_the_contact_and_keeps_the_vertical_rise_free
     guard = _holding_guard()
     for _ in range(50):  # past the 1 N/tick rate bound
         w = np.array([3.0, 0.0, -9.0, 0.0, 0.0, 0.0])
-        guard_feedforward(w, np.ones(6), guard.buffer)
+        guard_feedforward(w, np.ones(6), guard.state)
     np.testing.assert_allclose(w[:3], [3.0, 0.0, 0.0], atol=1e-12)  # -4 N push dropped too
     np.testing.assert_allclose(guard.target[:3], [3.0, 0.0, 0.0], atol=1e-12)
     guard2 = _holding_guard()
     for _ in range(50):
         up = np.array([3.0, 0.0, 25.0, 0.0, 0.0, 0.0])  # the model now asks to lift
-        guard_feedforward(up, np.ones(6), guard2.buffer)
+        guard_feedforward(up, np.ones(6), guard2.state)
     np.testing.assert_allclose(up[:3], [3.0, 0.0, 25.0], atol=1e-12)
 
 
@@ -120,5 +120,5 @@ def test_a_hold_ends_when_the_tcp_moves() -> None:
     guard = _holding_guard()
     w = np.array([3.0, 0.0, -9.0, 0.0, 0.0, 0.0])
     contact_guard_step(w, np.array([0.0, 0.0, 0.003]), np.zeros(3), w, np.ones(6),
-                       guard.buffer)
+                       guard.state)
     assert not guard.holding

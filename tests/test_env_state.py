@@ -78,7 +78,7 @@ def _cut_array(state):
 
 
 def _drop_array(state):
-    del state.arrays["controller.est"]
+    del state.arrays["controller.est.residual.lowpass"]
 
 
 def _float32_array(state):

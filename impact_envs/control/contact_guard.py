@@ -40,18 +40,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from impact_envs.control.kernel_layout import _next
 from impact_envs.control.validation import check_positive
 from impact_envs.errors import InvalidArgumentError
 
-GUARD_SIZE = 13 + 33 + 6
-"""Length of the guard's float64 buffer (``guard_views``)."""
 OPEN, WINDOW, WAIT, HOLD = 0.0, 1.0, 2.0, 3.0
-"""Phases (state[0]): no window yet, window open, growth seen (waiting), holding."""
+"""Phases (``GuardState.phase``): no window yet, window open, growth seen (waiting),
+holding."""
 
 
 @dataclass(frozen=True)
@@ -101,143 +100,205 @@ class ContactGuardConfig:
             raise InvalidArgumentError(f"invalid upward_cos {self.upward_cos!r}; valid: [-1, 1]")
 
 
-def guard_parameters(cfg: ContactGuardConfig, dt_s: float, stiffness_n_per_m: float) -> tuple:
-    """The guard's ``par`` slots for ``cfg`` at control period ``dt_s`` and translational
-    stiffness ``stiffness_n_per_m`` (the smallest diagonal entry: the most the TCP gives)."""
-    return (float(cfg.enabled), cfg.growth_step_n, round(cfg.follow_delay_s / dt_s),
-            cfg.give_fraction, cfg.follow_fraction, cfg.upward_cos, cfg.release_move_m,
-            1.0 / stiffness_n_per_m, cfg.force_max_n, cfg.torque_max_nm,
-            cfg.force_rate_max_n_per_s * dt_s, cfg.torque_rate_max_nm_per_s * dt_s,
-            cfg.horizontal_force_max_n)
+class GuardParams(NamedTuple):
+    """The guard's constants (``make_guard_state``; the config's names and units).
 
-
-@njit(cache=True)
-def guard_views(buf):
-    """(par (13), state (33), target (6)) of the guard buffer.
-
-    par = ``guard_parameters``; state = [phase, ticks waited, holds started, f0 (3), p0 (3),
-    e0 (3), hold force (3), hold position (3), blocked direction u (3), previous feedforward (6),
-    this tick's tracking offset (3), TCP position at the window's start (3)]; p0 is a
-    tracking offset (TCP - target);
-    target = this tick's training target (the slow wrench, force axes replaced by the hold).
+    Attributes:
+        enabled: Whether the guard and the bounds act at all.
+        growth_step_n: Growth of the predicted force that starts the test [N].
+        follow_delay_ticks: Ticks waited before the test (float, compared with a counter).
+        give_fraction, follow_fraction: Shares of the growth the TCP must give / the estimate
+            must follow.
+        upward_cos: Cosine above which a growth counts as upward (never held).
+        release_move_m: TCP move that releases a hold [m].
+        compliance_m_per_n: 1 / K of the stiffest-giving axis [m/N].
+        force_max_n, torque_max_nm: Norm bounds of the feedforward [N], [Nm].
+        force_step_max_n, torque_step_max_nm: Change bounds per tick [N], [Nm].
+        horizontal_force_max_n: Bound of the horizontal force part [N].
     """
-    par, o = _next(buf, 0, 13)
-    state, o = _next(buf, o, 33)
-    target, o = _next(buf, o, 6)
-    return par, state, target
+
+    enabled: bool
+    growth_step_n: float
+    follow_delay_ticks: float
+    give_fraction: float
+    follow_fraction: float
+    upward_cos: float
+    release_move_m: float
+    compliance_m_per_n: float
+    force_max_n: float
+    torque_max_nm: float
+    force_step_max_n: float
+    torque_step_max_nm: float
+    horizontal_force_max_n: float
+
+
+class GuardState(NamedTuple):
+    """Everything the guard's kernels read and write (world frame).
+
+    Attributes:
+        params: ``GuardParams``.
+        phase: (1,) OPEN, WINDOW, WAIT or HOLD.
+        ticks_waited: (1,) ticks in WAIT.
+        holds_started: (1,) holds since ``reset``.
+        f0: Predicted force when the window began (3,) [N].
+        p0: Tracking offset (TCP - target) when the window began (3,) [m].
+        e0: Slow estimate when the window began (3,) [N].
+        hold_force: The force held (3,) [N].
+        hold_pos: TCP position when the hold began (3,) [m].
+        blocked_dir: Unit direction the TCP did not give along (3,).
+        prev_ff: The previous tick's feedforward (6,) [N, Nm].
+        offset: This tick's tracking offset (3,) [m].
+        window_pos: TCP position when the window began (3,) [m].
+        target: This tick's training target (6,): the slow wrench, force axes replaced by
+            the hold.
+    """
+
+    params: GuardParams
+    phase: np.ndarray
+    ticks_waited: np.ndarray
+    holds_started: np.ndarray
+    f0: np.ndarray
+    p0: np.ndarray
+    e0: np.ndarray
+    hold_force: np.ndarray
+    hold_pos: np.ndarray
+    blocked_dir: np.ndarray
+    prev_ff: np.ndarray
+    offset: np.ndarray
+    window_pos: np.ndarray
+    target: np.ndarray
+
+
+def make_guard_state(cfg: ContactGuardConfig, dt_s: float,
+                     stiffness_n_per_m: float) -> GuardState:
+    """A zeroed ``GuardState`` for ``cfg`` at control period ``dt_s`` and translational
+    stiffness ``stiffness_n_per_m`` (the smallest diagonal entry: the most the TCP gives)."""
+    params = GuardParams(
+        enabled=bool(cfg.enabled), growth_step_n=float(cfg.growth_step_n),
+        follow_delay_ticks=float(round(cfg.follow_delay_s / dt_s)),
+        give_fraction=float(cfg.give_fraction), follow_fraction=float(cfg.follow_fraction),
+        upward_cos=float(cfg.upward_cos), release_move_m=float(cfg.release_move_m),
+        compliance_m_per_n=1.0 / stiffness_n_per_m, force_max_n=float(cfg.force_max_n),
+        torque_max_nm=float(cfg.torque_max_nm),
+        force_step_max_n=float(cfg.force_rate_max_n_per_s * dt_s),
+        torque_step_max_nm=float(cfg.torque_rate_max_nm_per_s * dt_s),
+        horizontal_force_max_n=float(cfg.horizontal_force_max_n))
+    z1, z3 = (lambda: np.zeros(1)), (lambda: np.zeros(3))
+    return GuardState(params, z1(), z1(), z1(), z3(), z3(), z3(), z3(), z3(), z3(),
+                      np.zeros(6), z3(), z3(), np.zeros(6))
 
 
 @njit(cache=True)
-def _start_window(state, pred, offset, w_est, pos) -> None:
-    state[0] = WINDOW
+def _start_window(st, pred, offset, w_est, pos) -> None:
+    st.phase[0] = WINDOW
     for i in range(3):
-        state[3 + i], state[6 + i], state[9 + i] = pred[i], offset[i], w_est[i]
-        state[30 + i] = pos[i]
+        st.f0[i], st.p0[i], st.e0[i] = pred[i], offset[i], w_est[i]
+        st.window_pos[i] = pos[i]
 
 
 @njit(cache=True)
-def _growth(state, pred, mask):
+def _growth(st, pred, mask):
     """(g_x, g_y, g_z, |g|): growth of the predicted force since the window began, on the
     axes the model learns (a masked axis carries a commanded force, not a learned one)."""
-    gx = (pred[0] - state[3]) if mask[0] != 0.0 else 0.0
-    gy = (pred[1] - state[4]) if mask[1] != 0.0 else 0.0
-    gz = (pred[2] - state[5]) if mask[2] != 0.0 else 0.0
+    gx = (pred[0] - st.f0[0]) if mask[0] != 0.0 else 0.0
+    gy = (pred[1] - st.f0[1]) if mask[1] != 0.0 else 0.0
+    gz = (pred[2] - st.f0[2]) if mask[2] != 0.0 else 0.0
     return gx, gy, gz, math.sqrt(gx * gx + gy * gy + gz * gz)
 
 
 @njit(cache=True)
-def _along(a, b, off, gx, gy, gz, size) -> float:
-    """(a - b[off:off+3]) . g / |g|."""
-    return ((a[0] - b[off]) * gx + (a[1] - b[off + 1]) * gy + (a[2] - b[off + 2]) * gz) / size
+def _along(a, b, gx, gy, gz, size) -> float:
+    """(a - b) . g / |g| (3-vectors)."""
+    return ((a[0] - b[0]) * gx + (a[1] - b[1]) * gy + (a[2] - b[2]) * gz) / size
 
 
 @njit(cache=True)
-def _exempt(par, state, gx, gy, gz, size) -> bool:
+def _exempt(par, st, gx, gy, gz, size) -> bool:
     """Growth never held: upward (the lift ratchet), or mostly a decrease of the force the
     window began with (g against f0: the press it could build only gets smaller)."""
-    if gz >= par[5] * size:
+    if gz >= par.upward_cos * size:
         return True
-    f0x, f0y, f0z = state[3], state[4], state[5]
+    f0x, f0y, f0z = st.f0[0], st.f0[1], st.f0[2]
     f0 = math.sqrt(f0x * f0x + f0y * f0y + f0z * f0z)
-    return gx * f0x + gy * f0y + gz * f0z <= -par[5] * size * f0
+    return gx * f0x + gy * f0y + gz * f0z <= -par.upward_cos * size * f0
 
 
 @njit(cache=True)
-def _blocked(par, state, gx, gy, gz, size, offset, w_est, pos) -> bool:
+def _blocked(par, st, gx, gy, gz, size, offset, w_est, pos) -> bool:
     """Whether the TCP did not give along g (relative to its target), did not retreat
     against it either (an external force that just changed), while the estimate followed."""
-    give = par[3] * size * par[7]
-    moved = _along(offset, state, 6, gx, gy, gz, size)
-    retreat = -_along(pos, state, 30, gx, gy, gz, size)
-    follow = _along(w_est, state, 9, gx, gy, gz, size)
-    return moved < give and retreat < give and follow >= par[4] * size
+    give = par.give_fraction * size * par.compliance_m_per_n
+    moved = _along(offset, st.p0, gx, gy, gz, size)
+    retreat = -_along(pos, st.window_pos, gx, gy, gz, size)
+    follow = _along(w_est, st.e0, gx, gy, gz, size)
+    return moved < give and retreat < give and follow >= par.follow_fraction * size
 
 
 @njit(cache=True)
-def _start_hold(state, ux, uy, uz, pos) -> None:
+def _start_hold(st, ux, uy, uz, pos) -> None:
     """Hold f0 without any push along the blocked direction u: f0 - max(0, f0 . u) u."""
-    state[0], state[1], state[2] = HOLD, 0.0, state[2] + 1.0
-    push = max(0.0, state[3] * ux + state[4] * uy + state[5] * uz)
-    state[12] = state[3] - push * ux
-    state[13] = state[4] - push * uy
-    state[14] = state[5] - push * uz
-    state[15], state[16], state[17] = pos[0], pos[1], pos[2]
-    state[18], state[19], state[20] = ux, uy, uz
+    st.phase[0], st.ticks_waited[0], st.holds_started[0] = HOLD, 0.0, st.holds_started[0] + 1.0
+    push = max(0.0, st.f0[0] * ux + st.f0[1] * uy + st.f0[2] * uz)
+    st.hold_force[0] = st.f0[0] - push * ux
+    st.hold_force[1] = st.f0[1] - push * uy
+    st.hold_force[2] = st.f0[2] - push * uz
+    st.hold_pos[0], st.hold_pos[1], st.hold_pos[2] = pos[0], pos[1], pos[2]
+    st.blocked_dir[0], st.blocked_dir[1], st.blocked_dir[2] = ux, uy, uz
 
 
 @njit(cache=True)
-def _held(w, state, mask) -> None:
+def _held(w, st, mask) -> None:
     """w[:3] := the hold on learned axes, plus any rise of w_z above it (upward stays free)."""
     for i in range(3):
         if mask[i] != 0.0:
-            w[i] = state[12 + i] + (max(0.0, w[i] - state[12 + i]) if i == 2 else 0.0)
+            w[i] = st.hold_force[i] + (max(0.0, w[i] - st.hold_force[i]) if i == 2 else 0.0)
 
 
 @njit(cache=True)
-def contact_guard_step(pred, pos, pos_target, w_slow, mask, buf) -> None:
-    """Advance the blocked test; write the training target (``guard_views``).
+def contact_guard_step(pred, pos, pos_target, w_slow, mask, st) -> None:
+    """Advance the blocked test; write the training target ``st.target``.
 
     ``pos`` / ``pos_target``: TCP position and its target [m]: the give is measured on the
     tracking offset ``pos - pos_target``, so a moving target is not read as a give. ``mask``:
     the learning mask; masked force axes are neither tested nor held. ``w_slow``: the slow
     estimate (whose rise the test reads, and the training target it passes on).
     """
-    par, state, target = guard_views(buf)
+    par, phase, target = st.params, st.phase, st.target
     for i in range(6):
         target[i] = w_slow[i]
-    if par[0] == 0.0:
+    if not par.enabled:
         return
-    offset = state[27:30]
+    offset = st.offset
     for i in range(3):
         offset[i] = pos[i] - pos_target[i]
-    if state[0] == OPEN:
-        _start_window(state, pred, offset, w_slow, pos)
-    gx, gy, gz, size = _growth(state, pred, mask)
-    if state[0] == WINDOW and size >= par[1]:
-        if _exempt(par, state, gx, gy, gz, size):
-            _start_window(state, pred, offset, w_slow, pos)
+    if phase[0] == OPEN:
+        _start_window(st, pred, offset, w_slow, pos)
+    gx, gy, gz, size = _growth(st, pred, mask)
+    if phase[0] == WINDOW and size >= par.growth_step_n:
+        if _exempt(par, st, gx, gy, gz, size):
+            _start_window(st, pred, offset, w_slow, pos)
         else:
-            state[0], state[1] = WAIT, 0.0
-    elif state[0] == WAIT:
-        state[1] += 1.0
-        if size < par[1]:
-            state[0] = WINDOW  # the growth went away again: keep the window
-        elif state[1] >= par[2]:
-            exempt = _exempt(par, state, gx, gy, gz, size)  # re-checked: g may have turned
-            if not exempt and _blocked(par, state, gx, gy, gz, size, offset, w_slow, pos):
-                _start_hold(state, gx / size, gy / size, gz / size, pos)
+            phase[0], st.ticks_waited[0] = WAIT, 0.0
+    elif phase[0] == WAIT:
+        st.ticks_waited[0] += 1.0
+        if size < par.growth_step_n:
+            phase[0] = WINDOW  # the growth went away again: keep the window
+        elif st.ticks_waited[0] >= par.follow_delay_ticks:
+            exempt = _exempt(par, st, gx, gy, gz, size)  # re-checked: g may have turned
+            if not exempt and _blocked(par, st, gx, gy, gz, size, offset, w_slow, pos):
+                _start_hold(st, gx / size, gy / size, gz / size, pos)
             else:
-                _start_window(state, pred, offset, w_slow, pos)
-    elif state[0] == HOLD:
+                _start_window(st, pred, offset, w_slow, pos)
+    elif phase[0] == HOLD:
         moved_sq = fall = 0.0
         for i in range(3):
-            d = pos[i] - state[15 + i]
+            d = pos[i] - st.hold_pos[i]
             moved_sq += d * d
-            fall += (state[12 + i] - pred[i]) * state[18 + i]
-        if moved_sq > par[6] * par[6] or fall > par[1]:
-            _start_window(state, pred, offset, w_slow, pos)
-    if state[0] == HOLD:
-        _held(target, state, mask)
+            fall += (st.hold_force[i] - pred[i]) * st.blocked_dir[i]
+        if moved_sq > par.release_move_m * par.release_move_m or fall > par.growth_step_n:
+            _start_window(st, pred, offset, w_slow, pos)
+    if phase[0] == HOLD:
+        _held(target, st, mask)
 
 
 @njit(cache=True)
@@ -258,46 +319,47 @@ def _bound_rate_and_norm(w_ff, prev, lo, rate_max, norm_max) -> None:
 
 
 @njit(cache=True)
-def guard_feedforward(w_ff, mask, buf) -> None:
+def guard_feedforward(w_ff, mask, st) -> None:
     """Apply the hold (learned force axes) and the bounds to this tick's feedforward ``w_ff``
     (6,) in place."""
-    par, state, _ = guard_views(buf)
-    if par[0] == 0.0:
+    par = st.params
+    if not par.enabled:
         return
-    if state[0] == HOLD:
-        _held(w_ff, state, mask)
-    prev = state[21:27]
-    _bound_rate_and_norm(w_ff, prev, 0, par[10], par[8])
+    if st.phase[0] == HOLD:
+        _held(w_ff, st, mask)
+    prev = st.prev_ff
+    _bound_rate_and_norm(w_ff, prev, 0, par.force_step_max_n, par.force_max_n)
     h_sq = w_ff[0] * w_ff[0] + w_ff[1] * w_ff[1]
-    if h_sq > par[12] * par[12]:
-        s = par[12] / math.sqrt(h_sq)
+    h_max = par.horizontal_force_max_n
+    if h_sq > h_max * h_max:
+        s = h_max / math.sqrt(h_sq)
         w_ff[0] *= s
         w_ff[1] *= s
-    _bound_rate_and_norm(w_ff, prev, 3, par[11], par[9])
+    _bound_rate_and_norm(w_ff, prev, 3, par.torque_step_max_nm, par.torque_max_nm)
     for i in range(6):
         prev[i] = w_ff[i]
 
 
 class ContactGuard:
-    """The guard's buffer (``guard_views``) filled from its config; ``reset`` per episode."""
+    """The guard as a typed object: ``state`` (``GuardState``) from its config; ``reset`` per
+    episode."""
 
     def __init__(self, config: ContactGuardConfig, dt_s: float, stiffness_n_per_m: float) -> None:
         self.config = config
-        self.buffer = np.zeros(GUARD_SIZE)
-        self._par, self._state, self.target = guard_views(self.buffer)
-        self._par[:] = guard_parameters(config, dt_s, stiffness_n_per_m)
+        self.state = make_guard_state(config, dt_s, stiffness_n_per_m)
+        self.target = self.state.target
 
     @property
     def holding(self) -> bool:
         """Whether the force feedforward is held on this tick."""
-        return bool(self._state[0] == HOLD)
+        return bool(self.state.phase[0] == HOLD)
 
     @property
     def holds_started(self) -> int:
         """Holds started since the last ``reset``."""
-        return int(self._state[2])
+        return int(self.state.holds_started[0])
 
     def reset(self) -> None:
         """Forget the window, any hold and the previous feedforward."""
-        self._state.fill(0.0)
-        self.target.fill(0.0)
+        for value in self.state[1:]:
+            value.fill(0.0)

@@ -25,7 +25,6 @@ from impact_envs.control.internal_model import InternalModel
 from impact_envs.control.kernel_layout import (
     APPLY_FEEDFORWARD,
     CONTROLLER_SIZE,
-    ESTIMATOR_KIND,
     INPUT_ABS_MAX,
     LAMBDA_NULL_SQ,
     LAMBDA_SQ,
@@ -162,12 +161,12 @@ class ImpactController:
         run_model = self.mode == "impact"
         par[LAMBDA_SQ], par[LAMBDA_NULL_SQ] = lam * lam, lam_n * lam_n
         par[MAPS_SHARED] = float(lam_n == lam)
-        par[ESTIMATOR_KIND] = self.estimator.kernel_kind
         par[RUN_MODEL] = par[APPLY_FEEDFORWARD] = float(run_model)
         self._grams = np.zeros((2, 6, 6))
         self.wrench_maps = np.zeros((2, 6, 7))  # estimator's (J J^T + l^2 I)^-1 J, projector's
         self._zeros6, self._zeros7 = np.zeros(6), np.zeros(7)
         self._include_friction = cfg.estimator.include_joint_friction
+        self._estimator_state = self.estimator.kernel_state()
 
     def reset(self, q0: np.ndarray, keep_internal_model: bool = False) -> None:
         """Start an episode at joint configuration ``q0`` [rad].
@@ -265,9 +264,9 @@ class ImpactController:
         model32, weights, biases, model, learner = self.internal_model.kernel_args()
         return kernels.ControllerState(
             ctl=self.buffer, grams=self._grams, wrench_maps=self.wrench_maps,
-            est=self.estimator.buffer, sf=self.slow_filter.state, model32=model32,
+            est=self._estimator_state, sf=self.slow_filter.state, model32=model32,
             weights=weights, biases=biases, model=model, learner=learner,
-            guard=self.guard.buffer, imp=self.impedance.state, lim=self.limiter.state)
+            guard=self.guard.state, imp=self.impedance.state, lim=self.limiter.state)
 
     def state_arrays(self) -> dict[str, np.ndarray]:
         """Every array that carries this controller from one tick to the next, by name, live

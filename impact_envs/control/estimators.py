@@ -11,14 +11,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 from numba import njit
 
 from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
 from impact_envs.control.jacobian import regularized_wrench_map
-from impact_envs.control.kernel_layout import _next
 from impact_envs.control.kernel_math import mat_t_vec, mat_vec
 from impact_envs.control.validation import check_positive
 from impact_envs.errors import check_choice
@@ -58,56 +57,85 @@ class EstimatorConfig:
         check_positive("lowpass_time_constant_s", self.lowpass_time_constant_s)
 
 
-# ---------------------------------------------------------------- buffer layout and kernel
-def residual_size(n: int) -> int:
-    """Length of a residual-estimator buffer for ``n`` joints."""
-    return 8 + 8 * n
+# ------------------------------------------------------------------ named state and kernels
+class ResidualState(NamedTuple):
+    """Everything ``residual_update`` reads and writes (n joints).
+
+    Attributes:
+        alpha: Per-tick low-pass gain a = 1 - exp(-dt / T).
+        gain: (2n,) per-row input gain: a / dt on the acceleration rows (the 1/dt of the
+            velocity difference), a on the torque rows.
+        started: (1,) 1 once a previous velocity exists.
+        lowpass: (2n,) [ddq_hat (n) [rad/s^2]; LP(tau_meas - C dq - g - tau_fric) (n) [Nm]].
+        raw: (2n,) this tick's filter inputs (before the gains).
+        dq_prev: (n,) the previous velocity [rad/s].
+        tau_residual: (n,) filtered residual tau_res [Nm].
+        wrench: (6,) the estimate [N, Nm], world frame.
+    """
+
+    alpha: float
+    gain: np.ndarray
+    started: np.ndarray
+    lowpass: np.ndarray
+    raw: np.ndarray
+    dq_prev: np.ndarray
+    tau_residual: np.ndarray
+    wrench: np.ndarray
+
+
+class MomentumState(NamedTuple):
+    """Everything ``momentum_update`` reads and writes (n joints).
+
+    Attributes:
+        gain_per_s: Observer gain K_O [1/s].
+        dt_s: Control period [s].
+        started: (1,) 1 once p_0 is recorded.
+        r: (n,) observer residual (tau_ext on the robot) [Nm].
+        p0: (n,) momentum at the start [kg m^2/s].
+        integral: (n,) S_k [Nm s].
+        p: (n,) this tick's momentum M dq.
+        tau_residual: (n,) -r [Nm].
+        wrench: (6,) the estimate [N, Nm], world frame.
+    """
+
+    gain_per_s: float
+    dt_s: float
+    started: np.ndarray
+    r: np.ndarray
+    p0: np.ndarray
+    integral: np.ndarray
+    p: np.ndarray
+    tau_residual: np.ndarray
+    wrench: np.ndarray
+
+
+def make_residual_state(config: EstimatorConfig, dt_s: float, n: int = 7) -> ResidualState:
+    """A zeroed ``ResidualState`` for ``config`` at period ``dt_s`` [s], ``n`` joints."""
+    alpha = 1.0 - math.exp(-dt_s / config.lowpass_time_constant_s)
+    gain = np.zeros(2 * n)
+    gain[:n], gain[n:] = alpha / dt_s, alpha
+    return ResidualState(alpha, gain, np.zeros(1), np.zeros(2 * n), np.zeros(2 * n),
+                         np.zeros(n), np.zeros(n), np.zeros(6))
+
+
+def make_momentum_state(config: EstimatorConfig, dt_s: float, n: int = 7) -> MomentumState:
+    """A zeroed ``MomentumState`` for ``config`` at period ``dt_s`` [s], ``n`` joints."""
+    return MomentumState(float(config.momentum_gain_per_s), float(dt_s), np.zeros(1),
+                         np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
+                         np.zeros(6))
 
 
 @njit(cache=True)
-def residual_views(buf):
-    """(par [a, started], lp [ddq_hat; tau_lp], raw, gain, dq_prev, tau_res, wrench)."""
-    n = (buf.shape[0] - 8) // 8
-    par, o = _next(buf, 0, 2)
-    lp, o = _next(buf, o, 2 * n)
-    raw, o = _next(buf, o, 2 * n)
-    gain, o = _next(buf, o, 2 * n)
-    dq_prev, o = _next(buf, o, n)
-    tau_res, o = _next(buf, o, n)
-    wrench, o = _next(buf, o, 6)
-    return par, lp, raw, gain, dq_prev, tau_res, wrench
-
-
-def momentum_size(n: int) -> int:
-    """Length of a momentum-observer buffer for ``n`` joints."""
-    return 9 + 5 * n
-
-
-@njit(cache=True)
-def momentum_views(buf):
-    """(par [K_O, dt, started], r, p0, integral, p, tau_res, wrench)."""
-    n = (buf.shape[0] - 9) // 5
-    par, o = _next(buf, 0, 3)
-    r, o = _next(buf, o, n)
-    p0, o = _next(buf, o, n)
-    integral, o = _next(buf, o, n)
-    p, o = _next(buf, o, n)
-    tau_res, o = _next(buf, o, n)
-    wrench, o = _next(buf, o, 6)
-    return par, r, p0, integral, p, tau_res, wrench
-
-
-@njit(cache=True)
-def residual_update(dq, tau_meas, fric, dyn, wrench_map, buf) -> None:
+def residual_update(dq, tau_meas, fric, dyn, wrench_map, st) -> None:
     """Residual estimator tick (estimators.py::ResidualEstimator); fric = 0 when not modelled."""
     _, mass, cor, grav, _, _ = dyn
-    par, lp, raw, gain, dq_prev, tau_res, wrench = residual_views(buf)
+    lp, raw, gain, dq_prev, tau_res = st.lowpass, st.raw, st.gain, st.dq_prev, st.tau_residual
     n = dq.shape[0]
-    alpha = par[0]
+    alpha = st.alpha
     for j in range(n):
-        raw[j] = dq[j] - dq_prev[j] if par[1] != 0.0 else 0.0
+        raw[j] = dq[j] - dq_prev[j] if st.started[0] != 0.0 else 0.0
         dq_prev[j] = dq[j]
-    par[1] = 1.0
+    st.started[0] = 1.0
     mat_vec(cor, dq, tau_res)  # scratch: C dq
     for j in range(n):
         raw[n + j] = tau_meas[j] - grav[j] - tau_res[j] - fric[j]
@@ -116,21 +144,21 @@ def residual_update(dq, tau_meas, fric, dyn, wrench_map, buf) -> None:
     mat_vec(mass, lp[:n], tau_res)
     for j in range(n):
         tau_res[j] = lp[n + j] - tau_res[j]
-    mat_vec(wrench_map, tau_res, wrench)
+    mat_vec(wrench_map, tau_res, st.wrench)
 
 
 @njit(cache=True)
-def momentum_update(dq, tau_meas, fric, dyn, wrench_map, buf) -> None:
+def momentum_update(dq, tau_meas, fric, dyn, wrench_map, st) -> None:
     """Momentum observer tick (estimators.py::MomentumObserver); fric = 0 when not modelled."""
     _, mass, cor, grav, _, _ = dyn
-    par, r, p0, integral, p, tau_res, wrench = momentum_views(buf)
-    gain, dt = par[0], par[1]
+    r, p0, integral, p, tau_res = st.r, st.p0, st.integral, st.p, st.tau_residual
+    gain, dt = st.gain_per_s, st.dt_s
     n = dq.shape[0]
     mat_vec(mass, dq, p)
-    if par[2] == 0.0:
+    if st.started[0] == 0.0:
         for j in range(n):
             p0[j] = p[j]
-        par[2] = 1.0
+        st.started[0] = 1.0
     else:
         mat_t_vec(cor, dq, tau_res)  # scratch: C^T dq
         for j in range(n):
@@ -139,11 +167,16 @@ def momentum_update(dq, tau_meas, fric, dyn, wrench_map, buf) -> None:
             r[j] = (p[j] - p0[j] - integral[j]) * gain
     for j in range(n):
         tau_res[j] = -r[j]
-    mat_vec(wrench_map, tau_res, wrench)
+    mat_vec(wrench_map, tau_res, st.wrench)
 
 
-RESIDUAL, MOMENTUM = 0, 1
-"""``kernel_kind`` of the two estimators (selects the kernel in ``kernels.controller_tick``)."""
+class EstimatorState(NamedTuple):
+    """The estimator stage of ``kernels.ControllerState``: ``momentum`` says which of the
+    two states runs (the other has no joints: one kernel type either way)."""
+
+    momentum: bool
+    residual: ResidualState
+    observer: MomentumState
 
 
 class WrenchEstimator(Protocol):
@@ -151,8 +184,10 @@ class WrenchEstimator(Protocol):
 
     wrench_world: np.ndarray
     tau_residual: np.ndarray
-    kernel_kind: int
-    buffer: np.ndarray
+
+    def kernel_state(self) -> EstimatorState:
+        """This estimator as ``kernels.controller_tick`` takes it."""
+        ...
 
     def reset(self) -> None:
         """Forget all filter / observer state."""
@@ -186,11 +221,12 @@ def _run_kernel(
         fric = np.zeros_like(dq)
     if wrench_map is None:
         wrench_map = regularized_wrench_map(dynamics.jacobian, cfg.regularization)
-    kernel = residual_update if estimator.kernel_kind == RESIDUAL else (
-        momentum_update
-    )
-    kernel(dq, np.asarray(tau_meas, dtype=np.float64), fric, dynamics_arrays(dynamics),
-           np.asarray(wrench_map, dtype=np.float64), estimator.buffer)
+    args = (dq, np.asarray(tau_meas, dtype=np.float64), fric, dynamics_arrays(dynamics),
+            np.asarray(wrench_map, dtype=np.float64), estimator.state)
+    if isinstance(estimator, MomentumObserver):
+        momentum_update(*args)
+    else:
+        residual_update(*args)
     return estimator.wrench_world
 
 
@@ -212,29 +248,25 @@ class ResidualEstimator:
         wrench_world: Last estimate (6,) [N, Nm].
     """
 
-    kernel_kind = RESIDUAL
-
     def __init__(self, config: EstimatorConfig, dt_s: float, n_joints: int = 7) -> None:
         """Create the estimator for control period ``dt_s`` [s]."""
         self.config = config
         self.dt_s = dt_s
-        self.alpha = 1.0 - math.exp(-dt_s / config.lowpass_time_constant_s)
-        n = n_joints
-        self.buffer = np.zeros(residual_size(n))
-        # Both filters run on one stacked vector [ddq (n); tau_meas - C dq - g - tau_fric (n)].
-        (self._par, self._lp, _, gain, _, self.tau_residual, self.wrench_world) = (
-            residual_views(self.buffer)
-        )
-        self._par[0] = self.alpha
-        gain[:n], gain[n:] = self.alpha / dt_s, self.alpha
-        self.ddq_hat = self._lp[:n]
+        self.state = st = make_residual_state(config, dt_s, n_joints)
+        self.alpha = st.alpha
+        self.tau_residual, self.wrench_world = st.tau_residual, st.wrench
+        self.ddq_hat = st.lowpass[:n_joints]
+
+    def kernel_state(self) -> EstimatorState:
+        """This estimator as ``kernels.controller_tick`` takes it."""
+        return EstimatorState(False, self.state, make_momentum_state(self.config, self.dt_s, 0))
 
     def reset(self) -> None:
         """Zero both filters and forget the previous velocity."""
-        self._lp.fill(0.0)
+        self.state.lowpass.fill(0.0)
         self.tau_residual.fill(0.0)
         self.wrench_world.fill(0.0)
-        self._par[1] = 0.0  # started
+        self.state.started[0] = 0.0
 
     def update(
         self,
@@ -263,7 +295,7 @@ class MomentumObserver:
     + r_{k-1}). Then r -> tau_ext (on the robot) with per-tick dynamics
     r_k = r_{k-1} + K_O dt (tau_ext - r_{k-1}), i.e. a first-order low-pass with time constant
     1 / K_O. No acceleration, no M^-1. tau_res = -r gives the libfranka sign. The tick is
-    ``momentum_update``; the arrays are views of ``buffer`` (``momentum_views``).
+    ``momentum_update`` on ``state`` (``MomentumState``).
 
     Attributes:
         r: Observer residual (estimate of tau_ext ON the robot) (7,) [Nm].
@@ -271,26 +303,22 @@ class MomentumObserver:
         wrench_world: Last estimate (6,) [N, Nm].
     """
 
-    kernel_kind = MOMENTUM
-
     def __init__(self, config: EstimatorConfig, dt_s: float, n_joints: int = 7) -> None:
         """Create the observer for control period ``dt_s`` [s]."""
         self.config = config
         self.dt_s = dt_s
         self.gain = config.momentum_gain_per_s
-        self.buffer = np.zeros(momentum_size(n_joints))
-        (self._par, self.r, _, self._sum, _, self.tau_residual, self.wrench_world) = (
-            momentum_views(self.buffer)
-        )
-        self._par[:2] = self.gain, dt_s
+        self.state = st = make_momentum_state(config, dt_s, n_joints)
+        self.r, self.tau_residual, self.wrench_world = st.r, st.tau_residual, st.wrench
+
+    def kernel_state(self) -> EstimatorState:
+        """This observer as ``kernels.controller_tick`` takes it."""
+        return EstimatorState(True, make_residual_state(self.config, self.dt_s, 0), self.state)
 
     def reset(self) -> None:
         """Forget p_0, the integral and the residual."""
-        self.r.fill(0.0)
-        self._sum.fill(0.0)
-        self.tau_residual.fill(0.0)
-        self.wrench_world.fill(0.0)
-        self._par[2] = 0.0  # started
+        for name in ("r", "integral", "tau_residual", "wrench", "started"):
+            getattr(self.state, name).fill(0.0)
 
     def update(
         self,

@@ -23,11 +23,11 @@ import numpy as np
 from numba import njit
 
 from impact_envs.control.contact_guard import (
+    GuardState,
     contact_guard_step,
     guard_feedforward,
-    guard_views,
 )
-from impact_envs.control.estimators import momentum_update, residual_update
+from impact_envs.control.estimators import EstimatorState, momentum_update, residual_update
 from impact_envs.control.impedance import ImpedanceState, impedance_law
 from impact_envs.control.internal_model.kernels import (
     model_gate_step,
@@ -41,7 +41,6 @@ from impact_envs.control.kernel_layout import (
     BAD_INPUT,
     BAD_QUAT,
     DQ_ABS_MAX,
-    ESTIMATOR_KIND,
     LAMBDA_NULL_SQ,
     LAMBDA_SQ,
     MAPS_SHARED,
@@ -103,22 +102,22 @@ class ControllerState(NamedTuple):
 
     ``ctl``: the controller's own buffer (``controller_views``); ``grams`` / ``wrench_maps``
     (2, 6, 6) / (2, 6, 7): the estimator's and the null-space projector's solves (one when
-    shared); ``est``: the estimator's buffer; ``sf``, ``imp``, ``lim``: the slow filter's,
-    the impedance law's and the limiter's named states; ``model32``,
+    shared); ``est``, ``sf``, ``imp``, ``lim``: the estimator's, the slow filter's, the
+    impedance law's and the limiter's named states; ``model32``,
     ``weights``, ``biases``, ``model``: the internal model's.
     """
 
     ctl: np.ndarray
     grams: np.ndarray
     wrench_maps: np.ndarray
-    est: np.ndarray
+    est: EstimatorState
     sf: SlowFilterState
     model32: np.ndarray
     weights: tuple
     biases: tuple
     model: np.ndarray
     learner: tuple
-    guard: np.ndarray
+    guard: GuardState
     imp: ImpedanceState
     lim: LimiterState
 
@@ -144,11 +143,12 @@ def controller_tick(
     regularized_wrench_map(dyn.jacobian, par[LAMBDA_SQ], grams[0], wrench_maps[0])
     if not shared:
         regularized_wrench_map(dyn.jacobian, par[LAMBDA_NULL_SQ], grams[1], wrench_maps[1])
-    if par[ESTIMATOR_KIND] == 0.0:
-        residual_update(dq, tau_meas, fric, dyn, wrench_maps[0], est)
+    if est.momentum:
+        momentum_update(dq, tau_meas, fric, dyn, wrench_maps[0], est.observer)
+        wrench_ext = est.observer.wrench
     else:
-        momentum_update(dq, tau_meas, fric, dyn, wrench_maps[0], est)
-    wrench_ext = est[est.shape[0] - 6:]  # both estimator layouts end with the wrench
+        residual_update(dq, tau_meas, fric, dyn, wrench_maps[0], est.residual)
+        wrench_ext = est.residual.wrench
     slow_rate = slow_filter_update(wrench_ext, sf)
     flags = 0
     run_model = par[RUN_MODEL] != 0.0
@@ -158,7 +158,7 @@ def controller_tick(
         model_predict(model32, weights, biases, model)
         contact_guard_step(pred, dyn.pos_ee_world, pos_target, sf.wrench_slow, mask,
                            guard)
-        target = guard_views(guard)[2]  # w_slow; force axes held by the guard replaced
+        target = guard.target  # w_slow; force axes held by the guard replaced
         flags = model_gate_step(target, slow_rate, mask, model)
         flags = learner_tick(flags, target, mask, model32, model, weights, biases, learner)
     for i in range(6):
