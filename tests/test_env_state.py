@@ -74,7 +74,7 @@ def _cut_weight(state):
 
 
 def _cut_array(state):
-    state.arrays["controller.ctl"] = state.arrays["controller.ctl"][:-1]
+    state.arrays["controller.tick.wrench_ff"] = state.arrays["controller.tick.wrench_ff"][:-1]
 
 
 def _drop_array(state):

@@ -23,14 +23,7 @@ from impact_envs.control.estimators import make_estimator
 from impact_envs.control.impedance import CartesianImpedance
 from impact_envs.control.internal_model import InternalModel
 from impact_envs.control.kernel_layout import (
-    APPLY_FEEDFORWARD,
-    CONTROLLER_SIZE,
     INPUT_ABS_MAX,
-    LAMBDA_NULL_SQ,
-    LAMBDA_SQ,
-    MAPS_SHARED,
-    RUN_MODEL,
-    controller_views,
 )
 from impact_envs.control.lie import invalid_quaternion
 from impact_envs.control.limits import TorqueLimiter
@@ -151,19 +144,13 @@ class ImpactController:
         self._is_reset = False
 
     def _init_buffers(self) -> None:
-        """Controller buffer (``kernels.controller_views``) and the wrench-map solves."""
+        """The controller's own state (``kernels.TickState``) and the estimator's."""
         cfg = self.config
         lam, lam_n = cfg.estimator.regularization, cfg.impedance.nullspace_pinv_damping
-        self.buffer = np.zeros(CONTROLLER_SIZE)
-        views = controller_views(self.buffer)
-        par, self.signals.wrench_cmd_world, _, self._scalars = views[:4]
-        self.signals.wrench_ff_world = views[4]
-        run_model = self.mode == "impact"
-        par[LAMBDA_SQ], par[LAMBDA_NULL_SQ] = lam * lam, lam_n * lam_n
-        par[MAPS_SHARED] = float(lam_n == lam)
-        par[RUN_MODEL] = par[APPLY_FEEDFORWARD] = float(run_model)
-        self._grams = np.zeros((2, 6, 6))
-        self.wrench_maps = np.zeros((2, 6, 7))  # estimator's (J J^T + l^2 I)^-1 J, projector's
+        self.tick = kernels.make_tick_state(lam, lam_n, self.mode == "impact")
+        self.signals.wrench_cmd_world = self.tick.wrench_cmd
+        self.signals.wrench_ff_world = self.tick.wrench_ff
+        self.wrench_maps = self.tick.wrench_maps  # estimator's (J J^T + l^2 I)^-1 J, projector's
         self._zeros6, self._zeros7 = np.zeros(6), np.zeros(7)
         self._include_friction = cfg.estimator.include_joint_friction
         self._estimator_state = self.estimator.kernel_state()
@@ -263,7 +250,7 @@ class ImpactController:
         kernel writes is this controller's state)."""
         model32, weights, biases, model, learner = self.internal_model.kernel_args()
         return kernels.ControllerState(
-            ctl=self.buffer, grams=self._grams, wrench_maps=self.wrench_maps,
+            tick=self.tick,
             est=self._estimator_state, sf=self.slow_filter.state, model32=model32,
             weights=weights, biases=biases, model=model, learner=learner,
             guard=self.guard.state, imp=self.impedance.state, lim=self.limiter.state)
@@ -330,7 +317,9 @@ class ImpactController:
     def _fill_signals(self) -> None:
         """Copy the kernel's scalar outputs into ``signals`` (the arrays are aliases)."""
         sig = self.signals
-        e_pos, e_rot, rate, surprise, gate, learning = self._scalars.tolist()
+        t = self.tick
+        e_pos, e_rot, rate = t.pos_error_norm[0], t.rot_error_norm[0], t.slow_rate[0]
+        surprise, gate, learning = t.surprise[0], t.gate_open[0], t.learning_active[0]
         sig.pos_error_norm_m, sig.rot_error_norm_rad = e_pos, e_rot
         sig.slow_wrench_rate, sig.surprise_n = rate, surprise
         sig.gate_open, sig.learning_active = gate != 0.0, learning != 0.0

@@ -37,24 +37,18 @@ from impact_envs.control.internal_model.kernels import (
 )
 from impact_envs.control.internal_model.learner import DIVERGED, learner_tick
 from impact_envs.control.kernel_layout import (
-    APPLY_FEEDFORWARD,
     BAD_INPUT,
     BAD_QUAT,
     DQ_ABS_MAX,
-    LAMBDA_NULL_SQ,
-    LAMBDA_SQ,
-    MAPS_SHARED,
     NON_FINITE,
     POS_ABS_MAX,
     Q_ABS_MAX,
     QUAT_ABS_MAX,
-    RUN_MODEL,
     STORE,
     TAU_ABS_MAX,
     TRAIN,
     WIDTH_ABS_MAX,
     WRENCH_ABS_MAX,
-    controller_views,
 )
 from impact_envs.control.kernel_math import quat_normalized, regularized_wrench_map
 from impact_envs.control.limits import LimiterState, torque_limiter
@@ -62,6 +56,7 @@ from impact_envs.control.slow_filter import SlowFilterState, slow_filter_update
 
 __all__ = [
     "BAD_INPUT", "BAD_QUAT", "DIVERGED", "NON_FINITE", "STORE", "TRAIN", "ControllerState",
+    "TickState", "make_tick_state",
     "controller_tick", "first_bad_input",
 ]
 
@@ -96,20 +91,73 @@ def first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, grippe
     return -1
 
 
-class ControllerState(NamedTuple):
-    """Every buffer ``controller_tick`` reads and writes, by stage (``ImpactController``
-    builds it; a named structure numba accepts, so no argument list of buffers).
+class TickParams(NamedTuple):
+    """The controller's own constants (``make_tick_state``).
 
-    ``ctl``: the controller's own buffer (``controller_views``); ``grams`` / ``wrench_maps``
-    (2, 6, 6) / (2, 6, 7): the estimator's and the null-space projector's solves (one when
-    shared); ``est``, ``sf``, ``imp``, ``lim``: the estimator's, the slow filter's, the
-    impedance law's and the limiter's named states; ``model32``,
-    ``weights``, ``biases``, ``model``: the internal model's.
+    Attributes:
+        lambda_sq: Estimator regularization lambda^2 [units of J squared].
+        lambda_null_sq: Null-space projector regularization lambda_n^2.
+        maps_shared: Whether both use the same lambda (one solve serves both).
+        run_model: Whether the internal model runs (mode "impact").
+        apply_feedforward: Whether its prediction is applied as feedforward.
     """
 
-    ctl: np.ndarray
+    lambda_sq: float
+    lambda_null_sq: float
+    maps_shared: bool
+    run_model: bool
+    apply_feedforward: bool
+
+
+class TickState(NamedTuple):
+    """What ``controller_tick`` itself writes (world frame).
+
+    Attributes:
+        params: ``TickParams``.
+        grams: (2, 6, 6) the estimator's and the projector's J J^T + lambda^2 I.
+        wrench_maps: (2, 6, 7) their (J J^T + lambda^2 I)^-1 J (one when shared).
+        wrench_cmd: (6,) the commanded wrench of the tick [N, Nm].
+        wrench_ff: (6,) the feedforward applied (the prediction on unmasked axes, the last
+            unmasked tick's value on masked ones) [N, Nm].
+        wrench_extra: (6,) w_ff + w_cmd, mapped by J^T [N, Nm].
+        pos_error_norm, rot_error_norm: (1,) |e_p| [m], |e_R| [rad].
+        slow_rate: (1,) the slow filter's dimensionless rate.
+        surprise, gate_open, learning_active: (1,) the internal model's (0 in "impedance").
+    """
+
+    params: TickParams
     grams: np.ndarray
     wrench_maps: np.ndarray
+    wrench_cmd: np.ndarray
+    wrench_ff: np.ndarray
+    wrench_extra: np.ndarray
+    pos_error_norm: np.ndarray
+    rot_error_norm: np.ndarray
+    slow_rate: np.ndarray
+    surprise: np.ndarray
+    gate_open: np.ndarray
+    learning_active: np.ndarray
+
+
+def make_tick_state(lambda_m: float, lambda_null_m: float, run_model: bool) -> TickState:
+    """A zeroed ``TickState``: estimator and projector regularizations, the model on/off."""
+    params = TickParams(lambda_m * lambda_m, lambda_null_m * lambda_null_m,
+                        lambda_null_m == lambda_m, run_model, run_model)
+    return TickState(params, np.zeros((2, 6, 6)), np.zeros((2, 6, 7)), np.zeros(6),
+                     np.zeros(6), np.zeros(6), *(np.zeros(1) for _ in range(6)))
+
+
+class ControllerState(NamedTuple):
+    """Every state ``controller_tick`` reads and writes, one named field per stage
+    (``ImpactController.kernel_state`` builds it; numba takes it as one argument).
+
+    ``tick``: the controller's own (``TickState``); ``est``, ``sf``, ``guard``, ``imp``,
+    ``lim``: the estimator's, slow filter's, contact guard's, impedance law's and limiter's
+    named states; ``model32``, ``weights``, ``biases``, ``model``, ``learner``: the internal
+    model's.
+    """
+
+    tick: TickState
     est: EstimatorState
     sf: SlowFilterState
     model32: np.ndarray
@@ -134,15 +182,15 @@ def controller_tick(
     closed loop's ``loop_tick`` in its own call, once per tick); a zero quaternion returns
     ``BAD_QUAT`` before anything is written.
     """
-    (ctl, grams, wrench_maps, est, sf, model32, weights, biases, model, learner, guard, imp,
-     lim) = state
-    par, sig_cmd, w_extra, scalars, w_ff = controller_views(ctl)
+    tick, est, sf, guard = state.tick, state.est, state.sf, state.guard
+    imp, lim = state.imp, state.lim
+    model32, weights, biases, model = state.model32, state.weights, state.biases, state.model
+    par, grams, wrench_maps, w_ff = tick.params, tick.grams, tick.wrench_maps, tick.wrench_ff
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
-    shared = par[MAPS_SHARED] != 0.0
-    regularized_wrench_map(dyn.jacobian, par[LAMBDA_SQ], grams[0], wrench_maps[0])
-    if not shared:
-        regularized_wrench_map(dyn.jacobian, par[LAMBDA_NULL_SQ], grams[1], wrench_maps[1])
+    regularized_wrench_map(dyn.jacobian, par.lambda_sq, grams[0], wrench_maps[0])
+    if not par.maps_shared:
+        regularized_wrench_map(dyn.jacobian, par.lambda_null_sq, grams[1], wrench_maps[1])
     if est.momentum:
         momentum_update(dq, tau_meas, fric, dyn, wrench_maps[0], est.observer)
         wrench_ext = est.observer.wrench
@@ -151,32 +199,33 @@ def controller_tick(
         wrench_ext = est.residual.wrench
     slow_rate = slow_filter_update(wrench_ext, sf)
     flags = 0
-    run_model = par[RUN_MODEL] != 0.0
     pred = model_views(model)[3]
-    if run_model:
+    if par.run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
         model_predict(model32, weights, biases, model)
         contact_guard_step(pred, dyn.pos_ee_world, pos_target, sf.wrench_slow, mask,
                            guard)
         target = guard.target  # w_slow; force axes held by the guard replaced
         flags = model_gate_step(target, slow_rate, mask, model)
-        flags = learner_tick(flags, target, mask, model32, model, weights, biases, learner)
+        flags = learner_tick(flags, target, mask, model32, model, weights, biases,
+                             state.learner)
     for i in range(6):
-        sig_cmd[i] = wrench_cmd[i]
-        if par[APPLY_FEEDFORWARD] == 0.0:
+        tick.wrench_cmd[i] = wrench_cmd[i]
+        if not par.apply_feedforward:
             w_ff[i] = 0.0
         elif mask[i] != 0.0:
             w_ff[i] = pred[i]
         # else: a masked axis keeps the feedforward of its last unmasked tick (its prediction
         # follows input features that the commanded contact changes: positive feedback)
-    if run_model:
+    if par.run_model:
         guard_feedforward(w_ff, mask, guard)  # hold and bounds (a no-op when disabled)
     for i in range(6):
-        w_extra[i] = w_ff[i] + wrench_cmd[i]
-    wrench_map_null = wrench_maps[0] if shared else wrench_maps[1]
-    impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, w_extra, imp)
+        tick.wrench_extra[i] = w_ff[i] + wrench_cmd[i]
+    wrench_map_null = wrench_maps[0] if par.maps_shared else wrench_maps[1]
+    impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, tick.wrench_extra,
+                  imp)
     torque_limiter(imp.tau_no_gravity, imp.tau_gravity, lim)
-    _fill_scalars(imp.pose_error, slow_rate, model, run_model, scalars)
+    _fill_scalars(imp.pose_error, slow_rate, model, par.run_model, tick)
     for v in lim.output:
         if not math.isfinite(v):
             flags |= NON_FINITE
@@ -184,13 +233,13 @@ def controller_tick(
 
 
 @njit(cache=True)
-def _fill_scalars(pose_error, slow_rate, model, run_model, scalars) -> None:
-    """scalars = [|e_p|, |e_R|, slow rate, surprise, gate open, learning active]."""
+def _fill_scalars(pose_error, slow_rate, model, run_model, tick) -> None:
+    """The tick's scalar outputs: |e_p|, |e_R|, slow rate, surprise, gate, learning."""
     e = pose_error
-    scalars[0] = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
-    scalars[1] = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
-    scalars[2] = slow_rate
+    tick.pos_error_norm[0] = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+    tick.rot_error_norm[0] = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
+    tick.slow_rate[0] = slow_rate
     state = model_views(model)[1]
-    scalars[3] = state[4] if run_model else 0.0
-    scalars[4] = state[3] if run_model else 0.0
-    scalars[5] = state[5] if run_model else 0.0
+    tick.surprise[0] = state[4] if run_model else 0.0
+    tick.gate_open[0] = state[3] if run_model else 0.0
+    tick.learning_active[0] = state[5] if run_model else 0.0
