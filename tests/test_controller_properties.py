@@ -28,6 +28,7 @@ from impact_envs.control import kernels
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import INPUT_ABS_MAX, ImpactController
 from impact_envs.control.lie import matrix_to_quat
+from impact_envs.control.limits import unpack_limiter
 from impact_envs.errors import InvalidArgumentError
 from impact_franka.fci import fr3_config
 
@@ -130,7 +131,8 @@ def _check_limits(ctrl: ImpactController, out: np.ndarray, before: dict) -> None
     tau_max = ctrl.limiter.tau_max
     assert np.all(np.isfinite(out))
     assert np.all(np.abs(out) <= tau_max + 1e-9)
-    step = np.abs(ctrl.limiter.state.last_no_gravity - before["lim.last_no_gravity"])
+    last = unpack_limiter(before["lim.buffer"], ctrl.limiter.packed.scalars)[0].last_no_gravity
+    step = np.abs(ctrl.limiter.state.last_no_gravity - last)
     free = np.abs(out) < tau_max - 1e-9
     assert np.all(step[free] <= ctrl.limiter.max_delta_nm + 1e-9)
 

@@ -74,15 +74,15 @@ def _cut_weight(state):
 
 
 def _cut_array(state):
-    state.arrays["controller.tick.wrench_ff"] = state.arrays["controller.tick.wrench_ff"][:-1]
+    state.arrays["controller.tick.buffer"] = state.arrays["controller.tick.buffer"][:-1]
 
 
 def _drop_array(state):
-    del state.arrays["controller.est.residual.lowpass"]
+    del state.arrays["controller.est.buffer"]
 
 
 def _float32_array(state):
-    name = "controller.imp.pose_error"
+    name = "controller.imp.buffer"
     state.arrays[name] = state.arrays[name].astype(np.float32)
 
 

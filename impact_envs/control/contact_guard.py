@@ -45,6 +45,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from impact_envs.control.kernel_layout import Packed, _next, layout_size
 from impact_envs.control.validation import check_positive
 from impact_envs.errors import InvalidArgumentError
 
@@ -169,10 +170,30 @@ class GuardState(NamedTuple):
     target: np.ndarray
 
 
-def make_guard_state(cfg: ContactGuardConfig, dt_s: float,
-                     stiffness_n_per_m: float) -> GuardState:
-    """A zeroed ``GuardState`` for ``cfg`` at control period ``dt_s`` and translational
-    stiffness ``stiffness_n_per_m`` (the smallest diagonal entry: the most the TCP gives)."""
+@njit(cache=True, inline="always")
+def unpack_guard(buf, params):
+    """(``GuardState`` as named views of ``buf``, the layout's length); ``params`` are all
+    scalars."""
+    phase, o = _next(buf, 0, 1)
+    ticks_waited, o = _next(buf, o, 1)
+    holds_started, o = _next(buf, o, 1)
+    f0, o = _next(buf, o, 3)
+    p0, o = _next(buf, o, 3)
+    e0, o = _next(buf, o, 3)
+    hold_force, o = _next(buf, o, 3)
+    hold_pos, o = _next(buf, o, 3)
+    blocked_dir, o = _next(buf, o, 3)
+    prev_ff, o = _next(buf, o, 6)
+    offset, o = _next(buf, o, 3)
+    window_pos, o = _next(buf, o, 3)
+    target, o = _next(buf, o, 6)
+    return GuardState(params, phase, ticks_waited, holds_started, f0, p0, e0, hold_force,
+                      hold_pos, blocked_dir, prev_ff, offset, window_pos, target), o
+
+
+def make_guard_state(cfg: ContactGuardConfig, dt_s: float, stiffness_n_per_m: float) -> Packed:
+    """``cfg`` at control period ``dt_s`` and translational stiffness ``stiffness_n_per_m``
+    (the smallest diagonal entry: the most the TCP gives), packed (``unpack_guard``)."""
     params = GuardParams(
         enabled=bool(cfg.enabled), growth_step_n=float(cfg.growth_step_n),
         follow_delay_ticks=float(round(cfg.follow_delay_s / dt_s)),
@@ -183,9 +204,7 @@ def make_guard_state(cfg: ContactGuardConfig, dt_s: float,
         force_step_max_n=float(cfg.force_rate_max_n_per_s * dt_s),
         torque_step_max_nm=float(cfg.torque_rate_max_nm_per_s * dt_s),
         horizontal_force_max_n=float(cfg.horizontal_force_max_n))
-    z1, z3 = (lambda: np.zeros(1)), (lambda: np.zeros(3))
-    return GuardState(params, z1(), z1(), z1(), z3(), z3(), z3(), z3(), z3(), z3(),
-                      np.zeros(6), z3(), z3(), np.zeros(6))
+    return Packed(params, np.zeros(layout_size(unpack_guard, params)))
 
 
 @njit(cache=True)
@@ -254,7 +273,7 @@ def _held(w, st, mask) -> None:
             w[i] = st.hold_force[i] + (max(0.0, w[i] - st.hold_force[i]) if i == 2 else 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def contact_guard_step(pred, pos, pos_target, w_slow, mask, st) -> None:
     """Advance the blocked test; write the training target ``st.target``.
 
@@ -318,7 +337,7 @@ def _bound_rate_and_norm(w_ff, prev, lo, rate_max, norm_max) -> None:
             w_ff[i] *= s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def guard_feedforward(w_ff, mask, st) -> None:
     """Apply the hold (learned force axes) and the bounds to this tick's feedforward ``w_ff``
     (6,) in place."""
@@ -346,7 +365,8 @@ class ContactGuard:
 
     def __init__(self, config: ContactGuardConfig, dt_s: float, stiffness_n_per_m: float) -> None:
         self.config = config
-        self.state = make_guard_state(config, dt_s, stiffness_n_per_m)
+        self.packed = make_guard_state(config, dt_s, stiffness_n_per_m)
+        self.state = unpack_guard(self.packed.buffer, self.packed.scalars)[0]
         self.target = self.state.target
 
     @property

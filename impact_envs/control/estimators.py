@@ -18,6 +18,7 @@ from numba import njit
 
 from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
 from impact_envs.control.jacobian import regularized_wrench_map
+from impact_envs.control.kernel_layout import Packed, _next, layout_size
 from impact_envs.control.kernel_math import mat_t_vec, mat_vec
 from impact_envs.control.validation import check_positive
 from impact_envs.errors import check_choice
@@ -109,23 +110,7 @@ class MomentumState(NamedTuple):
     wrench: np.ndarray
 
 
-def make_residual_state(config: EstimatorConfig, dt_s: float, n: int = 7) -> ResidualState:
-    """A zeroed ``ResidualState`` for ``config`` at period ``dt_s`` [s], ``n`` joints."""
-    alpha = 1.0 - math.exp(-dt_s / config.lowpass_time_constant_s)
-    gain = np.zeros(2 * n)
-    gain[:n], gain[n:] = alpha / dt_s, alpha
-    return ResidualState(alpha, gain, np.zeros(1), np.zeros(2 * n), np.zeros(2 * n),
-                         np.zeros(n), np.zeros(n), np.zeros(6))
-
-
-def make_momentum_state(config: EstimatorConfig, dt_s: float, n: int = 7) -> MomentumState:
-    """A zeroed ``MomentumState`` for ``config`` at period ``dt_s`` [s], ``n`` joints."""
-    return MomentumState(float(config.momentum_gain_per_s), float(dt_s), np.zeros(1),
-                         np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
-                         np.zeros(6))
-
-
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def residual_update(dq, tau_meas, fric, dyn, wrench_map, st) -> None:
     """Residual estimator tick (estimators.py::ResidualEstimator); fric = 0 when not modelled."""
     _, mass, cor, grav, _, _ = dyn
@@ -147,7 +132,7 @@ def residual_update(dq, tau_meas, fric, dyn, wrench_map, st) -> None:
     mat_vec(wrench_map, tau_res, st.wrench)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def momentum_update(dq, tau_meas, fric, dyn, wrench_map, st) -> None:
     """Momentum observer tick (estimators.py::MomentumObserver); fric = 0 when not modelled."""
     _, mass, cor, grav, _, _ = dyn
@@ -179,14 +164,63 @@ class EstimatorState(NamedTuple):
     observer: MomentumState
 
 
+class EstimatorScalars(NamedTuple):
+    """The scalar parameters of both estimators and their joint counts (one is 0)."""
+
+    momentum: bool
+    alpha: float
+    gain_per_s: float
+    dt_s: float
+    n_residual: int
+    n_observer: int
+
+
+@njit(cache=True, inline="always")
+def unpack_estimator(buf, sc):
+    """(``EstimatorState`` as named views of ``buf``, the layout's length)."""
+    n = sc.n_residual
+    gain, o = _next(buf, 0, 2 * n)
+    started, o = _next(buf, o, 1)
+    lowpass, o = _next(buf, o, 2 * n)
+    raw, o = _next(buf, o, 2 * n)
+    dq_prev, o = _next(buf, o, n)
+    tau_res, o = _next(buf, o, n)
+    wrench, o = _next(buf, o, 6)
+    residual = ResidualState(sc.alpha, gain, started, lowpass, raw, dq_prev, tau_res, wrench)
+    m = sc.n_observer
+    m_started, o = _next(buf, o, 1)
+    r, o = _next(buf, o, m)
+    p0, o = _next(buf, o, m)
+    integral, o = _next(buf, o, m)
+    p, o = _next(buf, o, m)
+    m_tau_res, o = _next(buf, o, m)
+    m_wrench, o = _next(buf, o, 6)
+    observer = MomentumState(sc.gain_per_s, sc.dt_s, m_started, r, p0, integral, p, m_tau_res,
+                             m_wrench)
+    return EstimatorState(sc.momentum, residual, observer), o
+
+
+def make_estimator_state(config: EstimatorConfig, dt_s: float, n_joints: int,
+                         momentum: bool) -> Packed:
+    """The residual estimator's (``momentum`` False) or the momentum observer's state for
+    ``config`` at period ``dt_s`` [s], packed (``unpack_estimator`` names it)."""
+    alpha = 1.0 - math.exp(-dt_s / config.lowpass_time_constant_s)
+    sc = EstimatorScalars(momentum, alpha, float(config.momentum_gain_per_s), float(dt_s),
+                          0 if momentum else n_joints, n_joints if momentum else 0)
+    packed = Packed(sc, np.zeros(layout_size(unpack_estimator, sc)))
+    gain = unpack_estimator(packed.buffer, sc)[0].residual.gain
+    gain[:sc.n_residual], gain[sc.n_residual:] = alpha / dt_s, alpha
+    return packed
+
+
 class WrenchEstimator(Protocol):
     """Common interface: ``update`` once per tick after ``dynamics.update(q, dq)``."""
 
     wrench_world: np.ndarray
     tau_residual: np.ndarray
 
-    def kernel_state(self) -> EstimatorState:
-        """This estimator as ``kernels.controller_tick`` takes it."""
+    def kernel_state(self) -> Packed:
+        """This estimator as ``kernels.controller_tick`` takes it (``unpack_estimator``)."""
         ...
 
     def reset(self) -> None:
@@ -252,14 +286,15 @@ class ResidualEstimator:
         """Create the estimator for control period ``dt_s`` [s]."""
         self.config = config
         self.dt_s = dt_s
-        self.state = st = make_residual_state(config, dt_s, n_joints)
+        self.packed = make_estimator_state(config, dt_s, n_joints, momentum=False)
+        self.state = st = unpack_estimator(self.packed.buffer, self.packed.scalars)[0].residual
         self.alpha = st.alpha
         self.tau_residual, self.wrench_world = st.tau_residual, st.wrench
         self.ddq_hat = st.lowpass[:n_joints]
 
-    def kernel_state(self) -> EstimatorState:
-        """This estimator as ``kernels.controller_tick`` takes it."""
-        return EstimatorState(False, self.state, make_momentum_state(self.config, self.dt_s, 0))
+    def kernel_state(self) -> Packed:
+        """This estimator as ``kernels.controller_tick`` takes it (``unpack_estimator``)."""
+        return self.packed
 
     def reset(self) -> None:
         """Zero both filters and forget the previous velocity."""
@@ -308,12 +343,13 @@ class MomentumObserver:
         self.config = config
         self.dt_s = dt_s
         self.gain = config.momentum_gain_per_s
-        self.state = st = make_momentum_state(config, dt_s, n_joints)
+        self.packed = make_estimator_state(config, dt_s, n_joints, momentum=True)
+        self.state = st = unpack_estimator(self.packed.buffer, self.packed.scalars)[0].observer
         self.r, self.tau_residual, self.wrench_world = st.r, st.tau_residual, st.wrench
 
-    def kernel_state(self) -> EstimatorState:
-        """This observer as ``kernels.controller_tick`` takes it."""
-        return EstimatorState(True, make_residual_state(self.config, self.dt_s, 0), self.state)
+    def kernel_state(self) -> Packed:
+        """This observer as ``kernels.controller_tick`` takes it (``unpack_estimator``)."""
+        return self.packed
 
     def reset(self) -> None:
         """Forget p_0, the integral and the residual."""

@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
+from impact_envs.control.kernel_layout import Packed, _next, layout_size
 from impact_envs.control.kernel_math import mat_t_vec, mat_vec, orientation_error
 from impact_envs.control.lie import invalid_quaternion
 from impact_envs.control.validation import check_len, check_positive
@@ -136,24 +137,55 @@ class ImpedanceState(NamedTuple):
     tau_no_gravity: np.ndarray
 
 
-def make_impedance_state(config: ImpedanceConfig, n_joints: int = 7) -> ImpedanceState:
-    """A zeroed ``ImpedanceState`` with ``config``'s gains for ``n_joints`` joints."""
-    params = ImpedanceParams(
-        stiffness=np.array(config.stiffness_translational_n_per_m
-                           + config.stiffness_rotational_nm_per_rad, dtype=np.float64),
-        damping=np.array(config.damping_translational_ns_per_m
-                         + config.damping_rotational_nms_per_rad, dtype=np.float64),
-        k_null=float(config.nullspace_stiffness_nm_per_rad),
-        d_null=float(config.nullspace_damping),
-        compensate_gravity=bool(config.compensate_gravity),
-        compensate_coriolis=bool(config.compensate_coriolis))
-    n = n_joints
-    return ImpedanceState(params, np.zeros(n), np.zeros(n), np.zeros(6), np.zeros(6),
-                          np.zeros(6), np.zeros(n), np.zeros(6), np.zeros(6), np.zeros(n),
-                          np.zeros(n), np.zeros(n))
+class ImpedanceScalars(NamedTuple):
+    """The scalar gains and the joint count (``ImpedanceParams`` without its arrays)."""
+
+    k_null: float
+    d_null: float
+    compensate_gravity: bool
+    compensate_coriolis: bool
+    n_joints: int
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def unpack_impedance(buf, sc):
+    """(``ImpedanceState`` as named views of ``buf``, the layout's length): the one
+    definition of the packed layout (``make_impedance_state`` sizes the buffer with it)."""
+    n = sc.n_joints
+    stiffness, o = _next(buf, 0, 6)
+    damping, o = _next(buf, o, 6)
+    q_null, o = _next(buf, o, n)
+    k_q_null, o = _next(buf, o, n)
+    pose_error, o = _next(buf, o, 6)
+    twist, o = _next(buf, o, 6)
+    wrench_imp, o = _next(buf, o, 6)
+    tau_posture, o = _next(buf, o, n)
+    wrench_null, o = _next(buf, o, 6)
+    wrench, o = _next(buf, o, 6)
+    tau_coriolis, o = _next(buf, o, n)
+    tau_gravity, o = _next(buf, o, n)
+    tau_no_gravity, o = _next(buf, o, n)
+    params = ImpedanceParams(stiffness, damping, sc.k_null, sc.d_null, sc.compensate_gravity,
+                             sc.compensate_coriolis)
+    return ImpedanceState(params, q_null, k_q_null, pose_error, twist, wrench_imp, tau_posture,
+                          wrench_null, wrench, tau_coriolis, tau_gravity, tau_no_gravity), o
+
+
+def make_impedance_state(config: ImpedanceConfig, n_joints: int = 7) -> Packed:
+    """``config``'s gains for ``n_joints`` joints, packed (``unpack_impedance`` names it)."""
+    sc = ImpedanceScalars(float(config.nullspace_stiffness_nm_per_rad),
+                          float(config.nullspace_damping), bool(config.compensate_gravity),
+                          bool(config.compensate_coriolis), int(n_joints))
+    packed = Packed(sc, np.zeros(layout_size(unpack_impedance, sc)))
+    params = unpack_impedance(packed.buffer, sc)[0].params
+    params.stiffness[:] = (config.stiffness_translational_n_per_m
+                           + config.stiffness_rotational_nm_per_rad)
+    params.damping[:] = (config.damping_translational_ns_per_m
+                         + config.damping_rotational_nms_per_rad)
+    return packed
+
+
+@njit(cache=True, inline="always")
 def impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map, wrench_ff, st) -> bool:
     """tau_no_gravity = J^T (K e - D J dq - W_n tau_0 + w_ff) + tau_0 + C dq (impedance.py).
 
@@ -212,7 +244,8 @@ class CartesianImpedance:
     def __init__(self, config: ImpedanceConfig, n_joints: int = 7) -> None:
         """Create the law from ``config`` for an arm with ``n_joints`` joints."""
         self.config = config
-        self.state = st = make_impedance_state(config, n_joints)
+        self.packed = make_impedance_state(config, n_joints)
+        self.state = st = unpack_impedance(self.packed.buffer, self.packed.scalars)[0]
         self.k_null, self.d_null = st.params.k_null, st.params.d_null
         self.stiffness, self.damping = st.params.stiffness, st.params.damping
         self.pose_error, self.twist_world = st.pose_error, st.twist

@@ -1,9 +1,19 @@
-"""What the numba kernels share: the status bits they return, the input bounds, and
-``_next`` for the internal model's flat buffers (the other stages keep named states).
+"""What the numba kernels share: the status bits they return, the input bounds, and the
+packing of a stage's state.
+
+A stage's state crosses from Python into numba *packed*: its scalar parameters (a small
+NamedTuple) and one float64 buffer holding all its arrays (``Packed``). Each stage's
+``unpack_*`` (``@njit``) is the one definition of its layout: it returns the named state
+(views of the buffer) and the layout's length. Passing one buffer per stage keeps the cost
+of every Python -> numba call low (each array crossing costs its unboxing), while the
+kernels and the stage classes read every field by name.
 """
 
 from __future__ import annotations
 
+from typing import Any, NamedTuple
+
+import numpy as np
 from numba import njit
 
 # Bits of the status returned by model_gate_step / controller_tick.
@@ -41,3 +51,20 @@ Q_ABS_MAX, DQ_ABS_MAX, TAU_ABS_MAX, POS_ABS_MAX, QUAT_ABS_MAX, WRENCH_ABS_MAX, W
 def _next(buf, start, size):
     """(buf[start:start + size], start + size)."""
     return buf[start:start + size], start + size
+
+
+class Packed(NamedTuple):
+    """A stage's state as it crosses into numba: ``scalars`` (its NamedTuple of scalar
+    parameters) and ``buffer`` (every array of it, float64, laid out by its ``unpack_*``)."""
+
+    scalars: Any
+    buffer: np.ndarray
+
+
+LAYOUT_PROBE = 1 << 16
+"""Length of the scratch buffer ``layout_size`` lays a stage out in (larger than any)."""
+
+
+def layout_size(unpack: Any, scalars: Any) -> int:
+    """Length of the buffer ``unpack`` lays out for ``scalars`` (its returned end offset)."""
+    return int(unpack(np.zeros(LAYOUT_PROBE), scalars)[1])

@@ -23,12 +23,12 @@ import numpy as np
 from numba import njit
 
 from impact_envs.control.contact_guard import (
-    GuardState,
     contact_guard_step,
     guard_feedforward,
+    unpack_guard,
 )
-from impact_envs.control.estimators import EstimatorState, momentum_update, residual_update
-from impact_envs.control.impedance import ImpedanceState, impedance_law
+from impact_envs.control.estimators import momentum_update, residual_update, unpack_estimator
+from impact_envs.control.impedance import impedance_law, unpack_impedance
 from impact_envs.control.internal_model.kernels import (
     model_gate_step,
     model_predict,
@@ -49,14 +49,17 @@ from impact_envs.control.kernel_layout import (
     TRAIN,
     WIDTH_ABS_MAX,
     WRENCH_ABS_MAX,
+    Packed,
+    _next,
+    layout_size,
 )
 from impact_envs.control.kernel_math import quat_normalized, regularized_wrench_map
-from impact_envs.control.limits import LimiterState, torque_limiter
-from impact_envs.control.slow_filter import SlowFilterState, slow_filter_update
+from impact_envs.control.limits import torque_limiter, unpack_limiter
+from impact_envs.control.slow_filter import slow_filter_update, unpack_slow_filter
 
 __all__ = [
     "BAD_INPUT", "BAD_QUAT", "DIVERGED", "NON_FINITE", "STORE", "TRAIN", "ControllerState",
-    "TickState", "make_tick_state",
+    "TickState", "make_tick_state", "unpack_limiter", "unpack_tick",
     "controller_tick", "first_bad_input",
 ]
 
@@ -139,12 +142,30 @@ class TickState(NamedTuple):
     learning_active: np.ndarray
 
 
-def make_tick_state(lambda_m: float, lambda_null_m: float, run_model: bool) -> TickState:
-    """A zeroed ``TickState``: estimator and projector regularizations, the model on/off."""
+@njit(cache=True, inline="always")
+def unpack_tick(buf, params):
+    """(``TickState`` as named views of ``buf``, the layout's length)."""
+    grams, o = _next(buf, 0, 72)
+    wrench_maps, o = _next(buf, o, 84)
+    wrench_cmd, o = _next(buf, o, 6)
+    wrench_ff, o = _next(buf, o, 6)
+    wrench_extra, o = _next(buf, o, 6)
+    pos_error_norm, o = _next(buf, o, 1)
+    rot_error_norm, o = _next(buf, o, 1)
+    slow_rate, o = _next(buf, o, 1)
+    surprise, o = _next(buf, o, 1)
+    gate_open, o = _next(buf, o, 1)
+    learning_active, o = _next(buf, o, 1)
+    return TickState(params, grams.reshape((2, 6, 6)), wrench_maps.reshape((2, 6, 7)),
+                     wrench_cmd, wrench_ff, wrench_extra, pos_error_norm, rot_error_norm,
+                     slow_rate, surprise, gate_open, learning_active), o
+
+
+def make_tick_state(lambda_m: float, lambda_null_m: float, run_model: bool) -> Packed:
+    """Estimator and projector regularizations, the model on/off; packed (``unpack_tick``)."""
     params = TickParams(lambda_m * lambda_m, lambda_null_m * lambda_null_m,
                         lambda_null_m == lambda_m, run_model, run_model)
-    return TickState(params, np.zeros((2, 6, 6)), np.zeros((2, 6, 7)), np.zeros(6),
-                     np.zeros(6), np.zeros(6), *(np.zeros(1) for _ in range(6)))
+    return Packed(params, np.zeros(layout_size(unpack_tick, params)))
 
 
 class ControllerState(NamedTuple):
@@ -153,21 +174,21 @@ class ControllerState(NamedTuple):
 
     ``tick``: the controller's own (``TickState``); ``est``, ``sf``, ``guard``, ``imp``,
     ``lim``: the estimator's, slow filter's, contact guard's, impedance law's and limiter's
-    named states; ``model32``, ``weights``, ``biases``, ``model``, ``learner``: the internal
-    model's.
+    states, each ``Packed`` (``unpack_*`` names them inside the kernel); ``model32``,
+    ``weights``, ``biases``, ``model``, ``learner``: the internal model's.
     """
 
-    tick: TickState
-    est: EstimatorState
-    sf: SlowFilterState
+    tick: Packed
+    est: Packed
+    sf: Packed
     model32: np.ndarray
     weights: tuple
     biases: tuple
     model: np.ndarray
     learner: tuple
-    guard: GuardState
-    imp: ImpedanceState
-    lim: LimiterState
+    guard: Packed
+    imp: Packed
+    lim: Packed
 
 
 @njit(cache=True)
@@ -182,8 +203,12 @@ def controller_tick(
     closed loop's ``loop_tick`` in its own call, once per tick); a zero quaternion returns
     ``BAD_QUAT`` before anything is written.
     """
-    tick, est, sf, guard = state.tick, state.est, state.sf, state.guard
-    imp, lim = state.imp, state.lim
+    tick = unpack_tick(state.tick.buffer, state.tick.scalars)[0]
+    est = unpack_estimator(state.est.buffer, state.est.scalars)[0]
+    sf = unpack_slow_filter(state.sf.buffer, state.sf.scalars)[0]
+    guard = unpack_guard(state.guard.buffer, state.guard.scalars)[0]
+    imp = unpack_impedance(state.imp.buffer, state.imp.scalars)[0]
+    lim = unpack_limiter(state.lim.buffer, state.lim.scalars)[0]
     model32, weights, biases, model = state.model32, state.weights, state.biases, state.model
     par, grams, wrench_maps, w_ff = tick.params, tick.grams, tick.wrench_maps, tick.wrench_ff
     if not quat_normalized(quat_target)[0]:
@@ -232,7 +257,7 @@ def controller_tick(
     return flags
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _fill_scalars(pose_error, slow_rate, model, run_model, tick) -> None:
     """The tick's scalar outputs: |e_p|, |e_R|, slow rate, surprise, gate, learning."""
     e = pose_error

@@ -18,6 +18,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from impact_envs.control.kernel_layout import Packed, _next, layout_size
 from impact_envs.control.validation import check_len, check_positive
 from impact_envs.errors import check_choice
 
@@ -110,15 +111,34 @@ class LimiterState(NamedTuple):
     output: np.ndarray
 
 
-def make_limiter_state(config: LimitsConfig, dt_s: float) -> LimiterState:
-    """A zeroed ``LimiterState`` for ``config`` at control period ``dt_s`` [s]."""
-    n = len(config.torque_max_nm)
-    params = LimiterParams(
-        max_delta_nm=float(config.torque_rate_max_nm_per_s * dt_s),
-        libfranka=config.rate_limiter == "libfranka",
-        max_rate_nm_per_s=float(config.torque_rate_max_nm_per_s),
-        tau_max=np.array(config.torque_max_nm, dtype=np.float64))
-    return LimiterState(params, np.zeros(n), np.zeros(n))
+class LimiterScalars(NamedTuple):
+    """The scalar parameters (``LimiterParams`` without ``tau_max``) and the joint count."""
+
+    max_delta_nm: float
+    libfranka: bool
+    max_rate_nm_per_s: float
+    n_joints: int
+
+
+@njit(cache=True, inline="always")
+def unpack_limiter(buf, sc):
+    """(``LimiterState`` as named views of ``buf``, the layout's length)."""
+    n = sc.n_joints
+    tau_max, o = _next(buf, 0, n)
+    last, o = _next(buf, o, n)
+    out, o = _next(buf, o, n)
+    params = LimiterParams(sc.max_delta_nm, sc.libfranka, sc.max_rate_nm_per_s, tau_max)
+    return LimiterState(params, last, out), o
+
+
+def make_limiter_state(config: LimitsConfig, dt_s: float) -> Packed:
+    """``config`` at control period ``dt_s`` [s], packed (``unpack_limiter`` names it)."""
+    sc = LimiterScalars(float(config.torque_rate_max_nm_per_s * dt_s),
+                        config.rate_limiter == "libfranka",
+                        float(config.torque_rate_max_nm_per_s), len(config.torque_max_nm))
+    packed = Packed(sc, np.zeros(layout_size(unpack_limiter, sc)))
+    unpack_limiter(packed.buffer, sc)[0].params.tau_max[:] = config.torque_max_nm
+    return packed
 
 
 @njit(cache=True)
@@ -153,7 +173,7 @@ def saturate_kernel(tau, tau_max, out) -> None:
         out[j] = v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def torque_limiter(tau_no_gravity, tau_gravity, st) -> None:
     """Rate-limit without gravity, add gravity, saturate; remember output - gravity."""
     par, last, out = st.params, st.last_no_gravity, st.output
@@ -185,7 +205,8 @@ class TorqueLimiter:
             config: Limits.
             dt_s: Control period [s]; the per-tick bound is ``torque_rate_max_nm_per_s * dt_s``.
         """
-        self.state = st = make_limiter_state(config, dt_s)
+        self.packed = make_limiter_state(config, dt_s)
+        self.state = st = unpack_limiter(self.packed.buffer, self.packed.scalars)[0]
         self.tau_max, self.output = st.params.tau_max, st.output
         self.max_delta_nm = st.params.max_delta_nm
 

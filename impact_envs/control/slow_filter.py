@@ -18,6 +18,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from impact_envs.control.kernel_layout import Packed, _next, layout_size
 from impact_envs.control.validation import check_positive
 
 
@@ -83,18 +84,39 @@ class SlowFilterState(NamedTuple):
     slow_rate: np.ndarray
 
 
-def make_slow_filter_state(config: SlowWrenchConfig, dt_s: float) -> SlowFilterState:
-    """A zeroed ``SlowFilterState`` for ``config`` at control period ``dt_s`` [s]."""
+class SlowFilterScalars(NamedTuple):
+    """The scalar parameter: 1 / (eta_f c_f) [s/N], which normalizes the slow rate."""
+
+    inv_max_force_slew: float
+
+
+@njit(cache=True, inline="always")
+def unpack_slow_filter(buf, sc):
+    """(``SlowFilterState`` as named views of ``buf``, the layout's length)."""
+    eta, o = _next(buf, 0, 6)
+    gain, o = _next(buf, o, 6)
+    clip, o = _next(buf, o, 6)
+    wrench_slow, o = _next(buf, o, 6)
+    rate, o = _next(buf, o, 6)
+    slow_rate, o = _next(buf, o, 1)
+    params = SlowFilterParams(eta, gain, clip, sc.inv_max_force_slew)
+    return SlowFilterState(params, wrench_slow, rate, slow_rate), o
+
+
+def make_slow_filter_state(config: SlowWrenchConfig, dt_s: float) -> Packed:
+    """``config`` at control period ``dt_s`` [s], packed (``unpack_slow_filter`` names it)."""
     f, t = config.rate_force_per_s, config.rate_torque_per_s
     cf, ct = config.clip_force_n, config.clip_torque_nm
-    eta = np.array((f, f, f, t, t, t), dtype=np.float64)
-    params = SlowFilterParams(eta_per_s=eta, gain=eta * dt_s,
-                              clip=np.array((cf, cf, cf, ct, ct, ct), dtype=np.float64),
-                              inv_max_force_slew=1.0 / config.max_force_slew_n_per_s)
-    return SlowFilterState(params, np.zeros(6), np.zeros(6), np.zeros(1))
+    sc = SlowFilterScalars(1.0 / config.max_force_slew_n_per_s)
+    packed = Packed(sc, np.zeros(layout_size(unpack_slow_filter, sc)))
+    params = unpack_slow_filter(packed.buffer, sc)[0].params
+    params.eta_per_s[:] = (f, f, f, t, t, t)
+    params.gain[:] = params.eta_per_s * dt_s
+    params.clip[:] = (cf, cf, cf, ct, ct, ct)
+    return packed
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def slow_filter_update(wrench_ext, st) -> float:
     """w_slow += eta dt clip(w_ext - w_slow, -c, c); returns (and stores) the slow rate."""
     par, w_slow, rate = st.params, st.wrench_slow, st.rate
@@ -127,7 +149,8 @@ class SlowWrenchFilter:
         """Create the filter for control period ``dt_s`` [s]."""
         self.config = config
         self.dt_s = dt_s
-        self.state = st = make_slow_filter_state(config, dt_s)
+        self.packed = make_slow_filter_state(config, dt_s)
+        self.state = st = unpack_slow_filter(self.packed.buffer, self.packed.scalars)[0]
         self.eta_per_s, self.gain, self.clip = st.params[:3]
         self.wrench_slow_world, self.rate_world = st.wrench_slow, st.rate
 

@@ -20,6 +20,7 @@ from impact_envs.control.kernels import (
     NON_FINITE,
     controller_tick,
     first_bad_input,
+    unpack_limiter,
 )
 from impact_envs.robot.chain_dynamics import chain_terms
 from impact_envs.robot.sim_kernels import actuate, sense
@@ -92,8 +93,9 @@ def loop_tick(i, friction, plan, sim, arm, dyn, state) -> int:
         flags = controller_tick(q, dq, tau, pos_target, quat_target, plan.wrench_cmd, plan.mask,
                                 width, plan.fric_model, dyn, state)
     if not flags & (BAD_INPUT | BAD_QUAT | NON_FINITE):
-        actuate(state.lim.output, sim.torque_limits, sim.tau_applied, sim.ctrl,
-                sim.arm_act, sim.gripper_act, plan.gripper_cmd)
+        tau = unpack_limiter(state.lim.buffer, state.lim.scalars)[0].output
+        actuate(tau, sim.torque_limits, sim.tau_applied, sim.ctrl, sim.arm_act, sim.gripper_act,
+                plan.gripper_cmd)
     for j in range(n):
         plan.taus[i, j] = sim.tau_applied[j]
     return flags
