@@ -25,7 +25,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import gymnasium as gym
-import numpy as np
 import zarr
 from tqdm import tqdm
 
@@ -33,6 +32,13 @@ import impact_envs
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_learn.collect_config import CollectConfig, parse_param_spec
+from impact_learn.collect_pixels import (
+    add_observation_arguments,
+    observation_attrs,
+    observation_from_args,
+    stored_dims,
+    with_cameras,
+)
 from impact_learn.collect_run import (
     AttemptBatch,
     EpisodeResult,
@@ -40,7 +46,7 @@ from impact_learn.collect_run import (
     attempt_batches,
     local_batch_results,
 )
-from impact_learn.dataset import EpisodeMeta, ReplayWriter
+from impact_learn.dataset import EpisodeMeta, FieldDims, ReplayWriter
 
 
 def default_env_factory(cfg: CollectConfig) -> Callable[[], gym.Env]:
@@ -77,7 +83,7 @@ def default_expert_factory(cfg: CollectConfig) -> Callable[[], Expert]:
 
 def store_attrs(cfg: CollectConfig, param_name: str) -> dict:
     """Store attributes that a resumed run must match."""
-    return {
+    attrs = {
         "env_id": cfg.env_id,
         "param_name": param_name,
         "param_spec": cfg.param_spec(),
@@ -88,6 +94,9 @@ def store_attrs(cfg: CollectConfig, param_name: str) -> dict:
         "post_success_steps": cfg.post_success_steps,
         "package_version": impact_envs.__version__,
     }
+    if cfg.observation.uses_images:  # a state store's attributes are as before
+        attrs["observation"] = observation_attrs(cfg.observation)
+    return attrs
 
 
 def _check_param_values(env: gym.Env, param_name: str, cfg: CollectConfig) -> None:
@@ -114,15 +123,13 @@ def collect(
     Batches of ``n_envs`` attempts run here one after another, or as Ray tasks several at a
     time; either way their episodes are stored in attempt order, so the store is the same.
     """
-    make_env = env_factory or default_env_factory(cfg)
+    make_env = with_cameras(env_factory or default_env_factory(cfg), cfg.observation)
     make_expert = expert_factory or default_expert_factory(cfg)
     envs = [make_env()]
     expert = make_expert()  # before the store exists: an expert that cannot be built is bad input
     param_name = getattr(envs[0].unwrapped, "param_name", "object_mass")
     _check_param_values(envs[0], param_name, cfg)
-    space = envs[0].observation_space
-    obs_dims = {k: int(np.prod(s.shape)) for k, s in space.spaces.items()}
-    writer = _open_store(cfg, obs_dims, store_attrs(cfg, param_name))
+    writer = _open_store(cfg, stored_dims(envs[0]), store_attrs(cfg, param_name))
     attempts = writer.attempts()
     attempt = max(int(writer.root.attrs.get("n_attempts", 0)), int(attempts.max(initial=-1)) + 1)
     batches = attempt_batches(cfg, attempt, param_name)
@@ -182,7 +189,7 @@ def _stored_episodes(path: Path) -> int:
         return 0
 
 
-def _open_store(cfg: CollectConfig, obs_dims: dict[str, int], attrs: dict) -> ReplayWriter:
+def _open_store(cfg: CollectConfig, obs_dims: FieldDims, attrs: dict) -> ReplayWriter:
     """The writer on ``OUT.partial`` (renamed to ``OUT`` when complete).
 
     A partial store without a complete episode (a run that failed early) is replaced; one
@@ -236,6 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="local (this process) | ray (batches as Ray tasks: docs/scale.md)")
     parser.add_argument("--ray-address", metavar="ADDR",
                         help="Ray cluster to join (default: $RAY_ADDRESS or a new local one)")
+    add_observation_arguments(parser)
     return parser
 
 
@@ -282,6 +290,7 @@ def config_from_args(args: argparse.Namespace) -> CollectConfig:
         progress=not args.no_progress,
         executor=args.executor,
         ray_address=args.ray_address,
+        observation=observation_from_args(args),
     )
 
 

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from impact_envs.control.controller import CONTROLLERS
+from impact_envs.envs.options import ObservationOptions
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.parallel import check_executor
 
@@ -41,6 +42,9 @@ class CollectConfig:
         executor: ``local`` (this process) or ``ray`` (each batch a Ray task:
             ``collect_ray``).
         ray_address: Ray cluster to join (None: ``$RAY_ADDRESS`` or a new local instance).
+        observation: What the store keeps: ``obs_mode`` ``"state"`` (every state entry) or an
+            image mode with its cameras and image size (``collect_pixels``; the expert acts
+            on the full state either way).
     """
 
     env_id: str
@@ -59,11 +63,15 @@ class CollectConfig:
     progress: bool = True
     executor: str = "local"
     ray_address: str | None = None
+    observation: ObservationOptions = ObservationOptions()
 
     def __post_init__(self) -> None:
         check_choice("controller", self.controller, CONTROLLERS)
         check_choice("compensation", self.compensation, COMPENSATIONS)
         check_executor(self.executor, self.ray_address)
+        if not isinstance(self.observation, ObservationOptions):
+            raise InvalidArgumentError(
+                f"invalid observation {self.observation!r}; valid: an ObservationOptions")
         given = [x is not None for x in (self.param, self.param_range, self.param_list)]
         if sum(given) > 1:
             raise InvalidArgumentError("give at most one of --mass, --mass-range, --mass-list")

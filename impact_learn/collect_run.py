@@ -136,11 +136,17 @@ def _result(
     obs: list[dict[str, np.ndarray]], actions: list[np.ndarray], success: bool, param: float
 ) -> EpisodeResult:
     return EpisodeResult(
-        obs={k: np.stack([np.ravel(o[k]) for o in obs]) for k in obs[0]},
+        obs={k: np.stack([_flat(o[k]) for o in obs]) for k in obs[0]},
         actions=np.stack(actions),
         success=success,
         param=float(param),
     )
+
+
+def _flat(value: np.ndarray) -> np.ndarray:
+    """A state entry as a flat vector; an image ``(H, W, C)`` as it is."""
+    value = np.asarray(value)
+    return value if value.ndim == 3 else np.ravel(value)
 
 
 def attempt_seed(base_seed: int, attempt: int) -> int:

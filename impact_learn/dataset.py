@@ -3,6 +3,8 @@
 Layout of ``DATA.zarr``::
 
     data/<obs_key>          (N, d_key) float32   one array per env observation key
+    data/<camera>_rgb       (N, H, W, 3) uint8   image stores only (impact-collect --obs-mode)
+    data/<camera>_depth     (N, H, W, 1) float32 --obs-mode rgbd only [m]
     data/action             (N, 10)    float32   expert action at the same step
     meta/episode_ends       (E,) int64           exclusive end index of each episode in N
     meta/episode_param      (E,) float64         randomized parameter (e.g. object mass [kg])
@@ -12,7 +14,9 @@ Layout of ``DATA.zarr``::
     attrs                   env_id, param_name, controller, expert options, versions, ...
 
 Episodes are appended one at a time; ``meta/episode_ends`` is written last, so an interrupted
-append is discarded (truncated) when the store is reopened.
+append is discarded (truncated) when the store is reopened. Image arrays are chunked by
+``IMAGE_CHUNK_FRAMES`` frames and compressed losslessly with zstd (level ``IMAGE_ZSTD_LEVEL``);
+a store holding them has ``format_version`` 2, a state-only store 1 (its bytes are as before).
 """
 
 from __future__ import annotations
@@ -25,11 +29,17 @@ from typing import Any
 import numpy as np
 import torch
 import zarr
+from zarr.codecs import ZstdCodec
 
 from impact_envs.errors import InvalidArgumentError
 
 FORMAT_VERSION = 1
-"""Version of the zarr layout above (stored in attrs['format_version'])."""
+"""Version of the zarr layout above (stored in attrs['format_version']) for state-only stores."""
+IMAGE_FORMAT_VERSION = 2
+"""``format_version`` of a store holding image arrays ``(N, H, W, C)``."""
+IMAGE_CHUNK_FRAMES = 64
+"""Frames per chunk of an image array (64 frames of 96x96 RGB: 1.8 MB before compression)."""
+IMAGE_ZSTD_LEVEL = 9
 ACTION_KEY = "action"
 META_DTYPES = {
     "episode_param": "float64",
@@ -40,6 +50,23 @@ META_DTYPES = {
 CHUNK_ROWS = 4096
 UNCHECKED_ATTRS = frozenset({"package_version", "n_attempts"})
 """Attributes that may differ when a store is reopened for appending."""
+
+
+@dataclass(frozen=True)
+class ImageSpec:
+    """An image observation stored per step.
+
+    Attributes:
+        shape: ``(H, W, C)`` of one image [px, px, channels].
+        dtype: ``"uint8"`` (RGB) or ``"float32"`` (depth [m]).
+    """
+
+    shape: tuple[int, int, int]
+    dtype: str
+
+
+FieldDims = Mapping[str, int | ImageSpec]
+"""``{obs_key: d_key}`` of flat float32 arrays, or an ``ImageSpec`` for an image key."""
 
 
 @dataclass(frozen=True)
@@ -64,7 +91,8 @@ class ReplayWriter:
 
     Args:
         path: Store path (a directory ``*.zarr``).
-        obs_dims: ``{obs_key: d_key}`` of the env's flat observation arrays.
+        obs_dims: ``{obs_key: d_key}`` of the env's flat observation arrays, or an
+            ``ImageSpec`` for each image key.
         attrs: JSON-serialisable store attributes (env_id, param_name, ...).
         append: Reopen an existing store (its attrs must match ``attrs`` on the keys given)
             instead of creating a new one; an existing store without ``append`` is an error.
@@ -73,23 +101,28 @@ class ReplayWriter:
     def __init__(
         self,
         path: str | Path,
-        obs_dims: Mapping[str, int],
+        obs_dims: FieldDims,
         attrs: Mapping[str, Any],
         *,
         append: bool = False,
     ) -> None:
         self.path = Path(path)
         self.obs_keys = tuple(obs_dims)
+        self.images = {k: v for k, v in obs_dims.items() if isinstance(v, ImageSpec)}
         if append and self.path.exists():
             self._open_for_append(attrs)
             return
         if self.path.exists():
             raise InvalidArgumentError(f"{self.path} exists; pass --resume to append or remove it")
         self.root = zarr.open_group(str(self.path), mode="w")
-        self.root.attrs.update({**attrs, "format_version": FORMAT_VERSION})
+        version = IMAGE_FORMAT_VERSION if self.images else FORMAT_VERSION
+        self.root.attrs.update({**attrs, "format_version": version})
         data, meta = self.root.require_group("data"), self.root.require_group("meta")
         for key, dim in {**obs_dims, ACTION_KEY: 10}.items():
-            data.zeros(name=key, shape=(0, dim), chunks=(CHUNK_ROWS, dim), dtype="float32")
+            if isinstance(dim, ImageSpec):
+                _create_image_array(data, key, dim)
+            else:
+                data.zeros(name=key, shape=(0, dim), chunks=(CHUNK_ROWS, dim), dtype="float32")
         for key, dtype in {**META_DTYPES, "episode_ends": "int64"}.items():
             meta.zeros(name=key, shape=(0,), chunks=(CHUNK_ROWS,), dtype=dtype)
 
@@ -101,7 +134,11 @@ class ReplayWriter:
             self._truncate_partial()
             for key in (*self.obs_keys, ACTION_KEY, *META_DTYPES, "episode_ends"):
                 group = "meta" if key in META_DTYPES or key == "episode_ends" else "data"
-                self.root[f"{group}/{key}"][:]  # every chunk decodes (a torn write does not)
+                arr = self.root[f"{group}/{key}"]
+                # every chunk decodes (a torn write does not); of an image array the last
+                # chunk, the only one an interrupted append rewrites
+                first = arr.shape[0] - 1 - (arr.shape[0] - 1) % arr.chunks[0]
+                arr[max(first, 0) if key in self.images else 0:]
         except InvalidArgumentError:
             raise
         except Exception as exc:  # noqa: BLE001 - zarr/numcodecs raise many types here
@@ -117,6 +154,11 @@ class ReplayWriter:
                 raise InvalidArgumentError(
                     f"cannot resume {self.path}: attr {key!r} is {stored[key]!r}, not {value!r}"
                 )
+        if stored.get("observation") != attrs.get("observation"):
+            raise InvalidArgumentError(
+                f"cannot resume {self.path}: it was collected with observation "
+                f"{stored.get('observation', 'state')!r}, not "
+                f"{attrs.get('observation', 'state')!r}")
         missing = [k for k in self.obs_keys if k not in self.root["data"]]
         if missing:
             raise InvalidArgumentError(f"cannot resume {self.path}: missing data arrays {missing}")
@@ -126,7 +168,7 @@ class ReplayWriter:
         n_steps = int(ends[-1]) if len(ends) else 0
         for key in (*self.obs_keys, ACTION_KEY):
             arr = self.root[f"data/{key}"]
-            arr.resize((n_steps, arr.shape[1]))
+            arr.resize((n_steps, *arr.shape[1:]))
         for key in META_DTYPES:
             self.root[f"meta/{key}"].resize((len(ends),))
 
@@ -146,21 +188,34 @@ class ReplayWriter:
     def append_episode(
         self, obs: Mapping[str, np.ndarray], actions: np.ndarray, meta: EpisodeMeta
     ) -> None:
-        """Append one episode: ``obs[key]`` ``(T, d_key)``, ``actions`` ``(T, 10)``."""
+        """Append one episode: ``obs[key]`` ``(T, d_key)`` (``(T, H, W, C)`` for an image
+        key), ``actions`` ``(T, 10)``."""
         length = int(actions.shape[0])
         if length == 0 or any(np.shape(obs[k])[0] != length for k in self.obs_keys):
             raise InvalidArgumentError(
                 "episode observations and actions must have equal length > 0"
             )
+        for key, spec in self.images.items():
+            if tuple(np.shape(obs[key])[1:]) != spec.shape:
+                raise InvalidArgumentError(
+                    f"images {key!r} have shape {np.shape(obs[key])[1:]}; valid: {spec.shape}")
         ends = self.root["meta/episode_ends"]
         start = int(ends[-1]) if ends.shape[0] else 0
         for key in self.obs_keys:
-            self.root[f"data/{key}"].append(np.asarray(obs[key], dtype=np.float32), axis=0)
+            dtype = self.images[key].dtype if key in self.images else np.float32
+            self.root[f"data/{key}"].append(np.asarray(obs[key], dtype=dtype), axis=0)
         self.root[f"data/{ACTION_KEY}"].append(np.asarray(actions, dtype=np.float32), axis=0)
         values = (meta.param, meta.seed, meta.success, meta.attempt)
         for key, value in zip(META_DTYPES, values, strict=True):
             self.root[f"meta/{key}"].append(np.asarray([value], dtype=META_DTYPES[key]))
         ends.append(np.asarray([start + length], dtype=np.int64))
+
+
+def _create_image_array(group: zarr.Group, key: str, spec: ImageSpec) -> None:
+    """An empty ``(0, H, W, C)`` image array, ``IMAGE_CHUNK_FRAMES`` frames a chunk, zstd."""
+    group.create_array(name=key, shape=(0, *spec.shape),
+                       chunks=(IMAGE_CHUNK_FRAMES, *spec.shape), dtype=spec.dtype,
+                       compressors=ZstdCodec(level=IMAGE_ZSTD_LEVEL), fill_value=0)
 
 
 @dataclass(frozen=True)

@@ -78,6 +78,12 @@ CASES: dict[str, tuple[str, tuple[str, ...], str]] = {
     "collect two mass options": ("collect", ("--mass", "1", "--mass-list", "1,2"),
                                  "not allowed with argument"),
     "collect missing env": ("collect", ("--env",), "expected one argument"),
+    "collect unknown obs mode": ("collect", ("--obs-mode", "depth"),
+                                 "valid choices: state, rgb, rgbd, state+rgb"),
+    "collect unknown camera": ("collect", ("--obs-mode", "rgb", "--cameras", "top"),
+                               "valid choices: front, side, overview, wrist"),
+    "collect image too large": ("collect", ("--obs-mode", "rgb", "--image-width", "4000"),
+                                "at most 640x480"),
     # impact-train (base: 2 steps on a small fake store)
     "train text file as data": ("train", ("--data", "{tmp}/t.txt"),
                                 "is not a readable demonstration store"),

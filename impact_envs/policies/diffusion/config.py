@@ -186,6 +186,56 @@ class DiffusionConfig:
         return cls.from_dict(data)
 
 
+@dataclass(frozen=True)
+class ImageEncoderConfig:
+    """Per-camera image encoder of the visuomotor policy (``vision.py``): Diffusion Policy's
+    ResNet-style encoder with GroupNorm and spatial-softmax pooling, sized for CPU training.
+
+    Attributes:
+        image_keys: Store / observation keys of the cameras (``"<camera>_rgb"``), one encoder
+            each (weights not shared).
+        crop_ratio: Side of the random crop (training) and centre crop (rollout) as a fraction
+            of the image side (DP: 84 of 96 px = 0.875).
+        channels: Output channels of the stem and of each residual stage; every stage after the
+            first halves the resolution (the stem halves it too).
+        n_groups: GroupNorm groups; must divide every entry of ``channels``.
+        keypoints: Spatial-softmax keypoints (2 coordinates each).
+        feature_dim: Features per camera and observation step fed to the U-Net's condition.
+    """
+
+    image_keys: tuple[str, ...] = ("overview_rgb", "wrist_rgb")
+    crop_ratio: float = 0.875
+    channels: tuple[int, ...] = (16, 32, 64)
+    n_groups: int = 8
+    keypoints: int = 32
+    feature_dim: int = 64
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "image_keys", tuple(self.image_keys))
+        object.__setattr__(self, "channels", tuple(int(c) for c in self.channels))
+        if not self.image_keys or len(set(self.image_keys)) != len(self.image_keys):
+            raise InvalidArgumentError(
+                f"invalid image_keys {self.image_keys!r}; valid: distinct keys such as "
+                "'overview_rgb', 'wrist_rgb'")
+        if not 0.0 < self.crop_ratio <= 1.0:
+            raise InvalidArgumentError(
+                f"invalid crop_ratio {self.crop_ratio}; valid: 0 < crop_ratio <= 1")
+        if not self.channels or min(self.channels) < 1:
+            raise InvalidArgumentError(f"invalid channels {self.channels}; valid: integers >= 1")
+        if self.n_groups < 1 or any(c % self.n_groups for c in self.channels):
+            raise InvalidArgumentError(
+                f"invalid n_groups {self.n_groups}; valid: a divisor of every channel count "
+                f"{self.channels}")
+        if self.keypoints < 1 or self.feature_dim < 1:
+            raise InvalidArgumentError(
+                f"invalid keypoints {self.keypoints} or feature_dim {self.feature_dim}; "
+                "valid: >= 1")
+
+    def crop_size(self, height: int, width: int) -> tuple[int, int]:
+        """Crop ``(height, width)`` [px] of an image of that size."""
+        return (max(1, round(height * self.crop_ratio)), max(1, round(width * self.crop_ratio)))
+
+
 def _kind(default: object, plural: bool = False) -> str:
     """What a field whose default is ``default`` accepts, in words."""
     if isinstance(default, bool):

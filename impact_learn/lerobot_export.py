@@ -1,0 +1,206 @@
+"""``impact-export-lerobot``: a demonstration store (state or images) as a LeRobot v3.0 dataset.
+
+Usage::
+
+    impact-export-lerobot --data data/hammer_rgb.zarr --out exports/hammer_rgb
+
+Written from the documented v3.0 layout (docs/lerobot.md): ``meta/info.json``,
+``meta/stats.json``, ``meta/tasks.parquet``, ``meta/episodes/chunk-000/file-000.parquet``,
+``data/chunk-CCC/file-FFF.parquet`` (one row per frame) and, for each camera,
+``videos/observation.images.<camera>/chunk-CCC/file-FFF.mp4`` (episodes one after another).
+The export is written to ``OUT.partial`` and renamed to ``OUT`` when complete.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import zarr
+
+from impact_envs.cli import OneLineParser
+from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_learn.dataset import ACTION_KEY
+from impact_learn.lerobot_video import VideoOptions
+
+CODEBASE_VERSION = "v3.0"
+CHUNKS_SIZE = 1000
+"""Files per ``chunk-CCC`` folder."""
+CHUNK_FILE = "chunk-{chunk_index:03d}/file-{file_index:03d}"
+DATA_PATH = f"data/{CHUNK_FILE}.parquet"
+VIDEO_PATH = f"videos/{{video_key}}/{CHUNK_FILE}.mp4"
+EPISODES_PATH = f"meta/episodes/{CHUNK_FILE}.parquet"
+ACTION_NAMES = ["x", "y", "z", *(f"rot6d_{i}" for i in range(6)), "gripper"]
+INDEX_FEATURES = ("timestamp", "frame_index", "episode_index", "index", "task_index")
+
+
+@dataclass(frozen=True)
+class ExportConfig:
+    """What to export and how.
+
+    Attributes:
+        data: The ``impact-collect`` store.
+        out: The dataset folder to create (must not exist).
+        task: The task text of every frame (None: the store's env id).
+        episodes_per_file: Episodes per data parquet file and per MP4 file.
+        video: MP4 encoding options (``fps`` is the env's 30 Hz policy rate).
+    """
+
+    data: str
+    out: str
+    task: str | None = None
+    episodes_per_file: int = 1000
+    video: VideoOptions = field(default_factory=VideoOptions)
+
+    def __post_init__(self) -> None:
+        if self.episodes_per_file < 1:
+            raise InvalidArgumentError(
+                f"--episodes-per-file must be >= 1, got {self.episodes_per_file}")
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Which store arrays become which LeRobot feature.
+
+    Attributes:
+        state_keys: Concatenated into ``observation.state`` (the robot's own entries and the
+            task's non-privileged ones).
+        env_keys: Concatenated into ``observation.environment_state`` (the task's privileged
+            entries: object pose, goal; only in state and ``state+rgb`` stores).
+        cameras: ``{feature name: store key}`` of the RGB cameras.
+        skipped: Store arrays not exported (depth images).
+    """
+
+    state_keys: tuple[str, ...]
+    env_keys: tuple[str, ...]
+    cameras: dict[str, str]
+    skipped: tuple[str, ...]
+
+
+def env_entries(env_id: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The env's state observation entries in its order, and the task's privileged ones
+    (both empty when ``env_id`` cannot be made)."""
+    import gymnasium as gym
+
+    from impact_envs.envs.pixels import privileged_keys
+
+    try:
+        env = gym.make(env_id)
+    except gym.error.Error:
+        return (), ()
+    try:
+        task = getattr(env.unwrapped, "task", None)
+        hidden = privileged_keys(task) if task is not None else ()
+        return tuple(env.observation_space.spaces), hidden
+    finally:
+        env.close()
+
+
+def plan_layout(data: zarr.Group, env_id: str) -> Layout:
+    """The ``Layout`` of a store's ``data`` group; vectors in the env's observation order
+    (then by name: zarr lists arrays in no fixed order), cameras by name."""
+    order, hidden = env_entries(env_id)
+    rank = {k: i for i, k in enumerate(order)}
+    keys = sorted((k for k, _ in data.arrays()), key=lambda k: (rank.get(k, len(rank)), k))
+    state, env, cameras, skipped = [], [], {}, []
+    for key in keys:
+        arr = data[key]
+        if key == ACTION_KEY:
+            continue
+        if arr.ndim == 4 and key.endswith("_rgb"):
+            cameras[f"observation.images.{key[:-4]}"] = key
+        elif arr.ndim == 4:
+            skipped.append(key)
+        else:
+            (env if key in hidden else state).append(key)
+    return Layout(tuple(state), tuple(env), cameras, tuple(skipped))
+
+
+def _names(data: zarr.Group, keys: tuple[str, ...]) -> list[str]:
+    return [f"{k}.{i}" for k in keys for i in range(data[k].shape[1])]
+
+
+def features(data: zarr.Group, layout: Layout, video: VideoOptions) -> dict[str, Any]:
+    """``info.json``'s ``features``: vectors, cameras, the action and the index columns."""
+    feats: dict[str, Any] = {}
+    for name, keys in (("observation.state", layout.state_keys),
+                       ("observation.environment_state", layout.env_keys)):
+        if keys:
+            names = _names(data, keys)
+            feats[name] = {"dtype": "float32", "shape": [len(names)], "names": names}
+    for name, key in layout.cameras.items():
+        h, w, c = data[key].shape[1:]
+        feats[name] = {"dtype": "video", "shape": [h, w, c],
+                       "names": ["height", "width", "channels"],
+                       "info": {"video.height": h, "video.width": w, "video.codec": "h264",
+                                "video.pix_fmt": "yuv420p", "video.is_depth_map": False,
+                                "video.fps": video.fps, "video.channels": c,
+                                "video.crf": video.crf, "video.g": video.gop_frames,
+                                "has_audio": False}}
+    feats["action"] = {"dtype": "float32", "shape": [10], "names": ACTION_NAMES}
+    for name in INDEX_FEATURES:
+        feats[name] = {"dtype": "float32" if name == "timestamp" else "int64", "shape": [1],
+                       "names": None}
+    return feats
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point of ``impact-export-lerobot``; bad input exits 2 with a one-line message."""
+    parser = OneLineParser(prog="impact-export-lerobot",
+                           description=__doc__.splitlines()[0])
+    parser.add_argument("--data", required=True, help="impact-collect store (*.zarr)")
+    parser.add_argument("--out", required=True, help="dataset folder to create")
+    parser.add_argument("--task", help="task text of every frame (default: the env id)")
+    parser.add_argument("--crf", type=int, default=18, help="x264 quality, 0-51 (lower: better)")
+    parser.add_argument("--gop", type=int, default=2, help="frames between keyframes")
+    parser.add_argument("--episodes-per-file", type=int, default=1000,
+                        help="episodes per parquet / MP4 file")
+    args = parser.parse_args(argv)
+    try:
+        cfg = ExportConfig(args.data, args.out, args.task, args.episodes_per_file,
+                           VideoOptions(crf=args.crf, gop_frames=args.gop))
+        summary = export_lerobot(cfg)
+    except ImpactError as exc:
+        parser.exit(2, f"impact-export-lerobot: error: {exc}\n")
+    print(json.dumps(summary))
+
+
+def export_lerobot(cfg: ExportConfig) -> dict[str, Any]:
+    """Write the dataset; returns a summary (episodes, frames, features, skipped arrays)."""
+    from impact_learn.lerobot_write import write_dataset
+
+    final, work = Path(cfg.out), Path(f"{cfg.out}.partial")
+    if final.exists():
+        raise InvalidArgumentError(f"{final} exists; remove it or give another --out")
+    root = _open_store(cfg.data)
+    if work.exists():
+        shutil.rmtree(work)
+    summary = write_dataset(root, work, cfg)
+    os.replace(work, final)
+    return summary
+
+
+def _open_store(path: str) -> zarr.Group:
+    if not Path(path).exists():
+        raise InvalidArgumentError(f"dataset {path} does not exist")
+    try:
+        root = zarr.open_group(path, mode="r")
+        n = root["meta/episode_ends"].shape[0]
+        root[f"data/{ACTION_KEY}"]
+    except Exception as exc:  # noqa: BLE001 - zarr raises many types for foreign stores
+        raise InvalidArgumentError(
+            f"{path} is not a readable demonstration store (impact-collect's zarr layout): "
+            f"{type(exc).__name__}") from None
+    if n == 0:
+        raise InvalidArgumentError(f"{path} holds no episodes")
+    return root
+
+
+if __name__ == "__main__":
+    main()
+
+
