@@ -31,24 +31,3 @@ def regularized_wrench_map(
     gram = np.empty((jac.shape[0], jac.shape[0]))
     kernel_math.regularized_wrench_map(jac, float(damping) * float(damping), gram, out)
     return out
-
-
-class RegularizedWrenchMap:
-    """Preallocated per-tick version of ``regularized_wrench_map`` for a fixed damping.
-
-    Attributes:
-        matrix: The last (J J^T + damping^2 I)^-1 J (6, 7), overwritten by ``update``.
-    """
-
-    def __init__(self, damping: float, n_joints: int = 7) -> None:
-        """Allocate buffers for a (6, n_joints) Jacobian and damping lambda > 0."""
-        self.damping = damping
-        self.damping_sq = float(damping) * float(damping)
-        self.matrix = np.zeros((6, n_joints))
-        self.gram = np.zeros((6, 6))
-
-    def update(self, jacobian: np.ndarray) -> np.ndarray:
-        """Recompute and return ``matrix`` for ``jacobian`` (6, n_joints)."""
-        jac = np.ascontiguousarray(jacobian, dtype=np.float64)
-        kernel_math.regularized_wrench_map(jac, self.damping_sq, self.gram, self.matrix)
-        return self.matrix
