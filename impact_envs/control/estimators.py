@@ -274,7 +274,7 @@ class ResidualEstimator:
     tau_res = LP(tau_meas - C dq - g - tau_fric) - M LP(ddq_fd) ~ LP(tau_meas - tau_model)
     (exact while M varies slowly compared with T). Both filter states start at 0 after
     ``reset``, so the estimate rises from 0 with time constant T instead of spiking. The tick
-    is ``residual_update``; the arrays are views of ``buffer`` (``residual_views``).
+    is ``residual_update`` on ``state`` (``ResidualState``, packed: ``unpack_estimator``).
 
     Attributes:
         ddq_hat: Filtered joint acceleration (7,) [rad/s^2].
