@@ -32,8 +32,8 @@ from impact_envs.control.impedance import impedance_law, unpack_impedance
 from impact_envs.control.internal_model.kernels import (
     model_gate_step,
     model_predict,
-    model_views,
     push_features,
+    unpack_model,
 )
 from impact_envs.control.internal_model.learner import DIVERGED, learner_tick
 from impact_envs.control.kernel_layout import (
@@ -224,7 +224,7 @@ def controller_tick(
         wrench_ext = est.residual.wrench
     slow_rate = slow_filter_update(wrench_ext, sf)
     flags = 0
-    pred = model_views(model)[3]
+    pred = unpack_model(model)[0].pred
     if par.run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
         model_predict(model32, weights, biases, model)
@@ -264,7 +264,7 @@ def _fill_scalars(pose_error, slow_rate, model, run_model, tick) -> None:
     tick.pos_error_norm[0] = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
     tick.rot_error_norm[0] = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
     tick.slow_rate[0] = slow_rate
-    state = model_views(model)[1]
-    tick.surprise[0] = state[4] if run_model else 0.0
-    tick.gate_open[0] = state[3] if run_model else 0.0
-    tick.learning_active[0] = state[5] if run_model else 0.0
+    m = unpack_model(model)[0]
+    tick.surprise[0] = m.surprise[0] if run_model else 0.0
+    tick.gate_open[0] = m.gate_open[0] if run_model else 0.0
+    tick.learning_active[0] = m.learning_active[0] if run_model else 0.0

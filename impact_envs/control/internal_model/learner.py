@@ -25,9 +25,9 @@ from numba import njit
 
 from impact_envs.control.internal_model.kernels import (
     dense,
-    model32_views,
-    model_views,
     tanh_inplace,
+    unpack_model,
+    unpack_model32,
 )
 from impact_envs.control.kernel_layout import STORE, TRAIN
 
@@ -224,10 +224,11 @@ def learner_tick(flags, wrench_slow, mask, buf32, buf, weights, biases, lrn) -> 
     if lrn.scal[IN_KERNEL] == 0.0:
         return flags
     if flags & (STORE | TRAIN):
-        par, state, out_scale, _, _ = model_views(buf)
-        n_rows, n_feat = int(par[6]), int(par[7])
-        hist = model32_views(buf32, n_feat)[2]
-        start = ((int(state[0]) + n_rows - 1) % n_rows + 1) * n_feat
+        m = unpack_model(buf)[0]
+        out_scale = m.out_scale
+        n_rows, n_feat = int(m.history_length[0]), int(m.n_features[0])
+        hist = unpack_model32(buf32, n_feat).hist
+        start = ((int(m.head[0]) + n_rows - 1) % n_rows + 1) * n_feat
         x = hist[start:start + n_rows * n_feat]
         target = lrn.target
         for i in range(6):

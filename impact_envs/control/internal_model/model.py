@@ -62,7 +62,7 @@ class InternalModel:
 
     Per-tick work (feature push, forward pass, surprise, gate, replay/SGD schedule) is
     ``kernels.push_features`` / ``model_predict`` / ``model_gate_step`` on ``kernel_args()``
-    (layouts: ``kernels.model_views``, ``model32_views``); only the replay insert and the SGD
+    (layouts: ``kernels.unpack_model``, ``unpack_model32``); only the replay insert and the SGD
     step (``learn``) run in Python.
 
     Attributes:
@@ -101,7 +101,7 @@ class InternalModel:
         self.n_divergences = 0
         self._init_kernel_buffers()
         self.gate = SurpriseGate(cfg.surprise_open_n, cfg.surprise_release_n, cfg.slow_rate_max,
-                                 state=self._state[3:4])
+                                 state=self.state.gate_open)
         self._inv_output_scale = (1.0 / OUTPUT_SCALE).astype(np.float32)
         self._target = np.zeros(6, dtype=np.float32)
         self._mask = np.ones(6, dtype=np.float32)
@@ -116,7 +116,8 @@ class InternalModel:
         cfg = self.config
         L, F = cfg.history_length, FEATURE_DIM
         self._buf32 = np.zeros(kernels.model32_size(L, F), dtype=np.float32)
-        offset, inv_scale, hist = kernels.model32_views(self._buf32, F)
+        m32 = kernels.unpack_model32(self._buf32, F)
+        offset, inv_scale, hist = m32.offset, m32.inv_scale, m32.hist
         offset[:] = FEATURE_OFFSET
         inv_scale[:] = 1.0 / FEATURE_SCALE
         if not cfg.wrench_feature:  # the estimated-wrench inputs then read 0 on every tick
@@ -124,12 +125,16 @@ class InternalModel:
         # History stored twice (rows h and h + L) so the window oldest..newest is contiguous.
         self._hist = hist.reshape(2 * L, F)
         self._windows = [self._hist[h + 1 : h + 1 + L].reshape(-1) for h in range(L)]
-        self.buffer = np.zeros(kernels.model_size(max(cfg.hidden_sizes)))
-        par, self._state, out_scale, self.wrench_pred_world, _ = kernels.model_views(self.buffer)
-        par[:] = (cfg.surprise_open_n, cfg.surprise_release_n, cfg.slow_rate_max,
-                  cfg.replay_period, cfg.update_every, 1.0, L, F)
-        out_scale[:] = OUTPUT_SCALE
-        self._par = par
+        width = max(cfg.hidden_sizes)
+        self.buffer = np.zeros(kernels.model_size(width))
+        self.state = m = kernels.unpack_model(self.buffer)[0]
+        m.max_hidden[0], m.open_n[0], m.release_n[0] = width, cfg.surprise_open_n, \
+            cfg.surprise_release_n
+        m.slow_rate_max[0], m.replay_period[0] = cfg.slow_rate_max, cfg.replay_period
+        m.update_every[0], m.learning_enabled[0] = cfg.update_every, 1.0
+        m.history_length[0], m.n_features[0] = L, F
+        m.out_scale[:] = OUTPUT_SCALE
+        self.wrench_pred_world = m.pred
 
     # ----------------------------------------------------------------- state management
     @property
@@ -149,21 +154,21 @@ class InternalModel:
     @property
     def surprise_n(self) -> float:
         """Force surprise of the last tick [N]."""
-        return float(self._state[4])
+        return float(self.state.surprise[0])
 
     @property
     def learning_active(self) -> bool:
         """Whether the last tick was a learning tick."""
-        return bool(self._state[5])
+        return bool(self.state.learning_active[0])
 
     @property
     def learning_enabled(self) -> bool:
         """False freezes the weights (prediction and surprise keep running, the gate stops)."""
-        return bool(self._par[5])
+        return bool(self.state.learning_enabled[0])
 
     @learning_enabled.setter
     def learning_enabled(self, value: bool) -> None:
-        self._par[5] = float(value)
+        self.state.learning_enabled[0] = float(value)
 
     def refresh_fast_path(self) -> None:
         """Re-bind the fast path to the torch parameters (call after replacing ``net``).
@@ -183,7 +188,9 @@ class InternalModel:
     def reset_history(self) -> None:
         """Clear the history, gate and prediction; keep weights and replay samples."""
         self._hist.fill(0.0)
-        self._state.fill(0.0)  # head, filled, tick, gate, surprise, learning
+        m = self.state
+        for per_tick in (m.head, m.filled, m.tick, m.gate_open, m.surprise, m.learning_active):
+            per_tick.fill(0.0)
         self.wrench_pred_world.fill(0.0)
         self._reseed_learner()
 
@@ -215,7 +222,7 @@ class InternalModel:
 
     def history_input(self) -> np.ndarray:
         """The current flattened normalized history (L * 24,) float32 (a view)."""
-        head, filled = self._state[:2].tolist()
+        head, filled = self.state.head[0], self.state.filled[0]
         if not filled:
             return np.zeros(self.input_dim, dtype=np.float32)
         return self._windows[(int(head) - 1) % self.config.history_length]
