@@ -34,6 +34,7 @@ from impact_envs.control.internal_model.kernels import (
     model_predict,
     push_features,
     unpack_model,
+    unpack_model32,
 )
 from impact_envs.control.internal_model.learner import DIVERGED, learner_tick
 from impact_envs.control.kernel_layout import (
@@ -224,16 +225,17 @@ def controller_tick(
         wrench_ext = est.residual.wrench
     slow_rate = slow_filter_update(wrench_ext, sf)
     flags = 0
-    pred = unpack_model(model)[0].pred
+    m = unpack_model(model)[0]
+    m32 = unpack_model32(model32, int(m.n_features[0]))
+    pred = m.pred
     if par.run_model:
-        push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, model32, model)
-        model_predict(model32, weights, biases, model)
+        push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, m32, m)
+        model_predict(m32, weights, biases, m)
         contact_guard_step(pred, dyn.pos_ee_world, pos_target, sf.wrench_slow, mask,
                            guard)
         target = guard.target  # w_slow; force axes held by the guard replaced
-        flags = model_gate_step(target, slow_rate, mask, model)
-        flags = learner_tick(flags, target, mask, model32, model, weights, biases,
-                             state.learner)
+        flags = model_gate_step(target, slow_rate, mask, m)
+        flags = learner_tick(flags, target, mask, m32, m, weights, biases, state.learner)
     for i in range(6):
         tick.wrench_cmd[i] = wrench_cmd[i]
         if not par.apply_feedforward:
@@ -250,7 +252,7 @@ def controller_tick(
     impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, tick.wrench_extra,
                   imp)
     torque_limiter(imp.tau_no_gravity, imp.tau_gravity, lim)
-    _fill_scalars(imp.pose_error, slow_rate, model, par.run_model, tick)
+    _fill_scalars(imp.pose_error, slow_rate, m, par.run_model, tick)
     for v in lim.output:
         if not math.isfinite(v):
             flags |= NON_FINITE
@@ -258,13 +260,12 @@ def controller_tick(
 
 
 @njit(cache=True, inline="always")
-def _fill_scalars(pose_error, slow_rate, model, run_model, tick) -> None:
+def _fill_scalars(pose_error, slow_rate, m, run_model, tick) -> None:
     """The tick's scalar outputs: |e_p|, |e_R|, slow rate, surprise, gate, learning."""
     e = pose_error
     tick.pos_error_norm[0] = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
     tick.rot_error_norm[0] = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
     tick.slow_rate[0] = slow_rate
-    m = unpack_model(model)[0]
     tick.surprise[0] = m.surprise[0] if run_model else 0.0
     tick.gate_open[0] = m.gate_open[0] if run_model else 0.0
     tick.learning_active[0] = m.learning_active[0] if run_model else 0.0

@@ -55,7 +55,7 @@ class ModelState(NamedTuple):
     acts: np.ndarray
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def unpack_model(buf):
     """(``ModelState`` as named views of ``buf``, the layout's length): the one definition
     of the layout; ``max_hidden`` (the first slot) sizes ``acts``."""
@@ -107,7 +107,7 @@ def model32_size(history_length: int, n_features: int) -> int:
     return (2 + 2 * history_length) * n_features
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def unpack_model32(buf32, n_features):
     """``Model32State`` as named views of the float32 buffer."""
     offset, o = _next(buf32, 0, n_features)
@@ -125,17 +125,15 @@ def _put_features(row, k, values, offset, inv_scale) -> int:
     return k
 
 
-@njit(cache=True)
-def push_features(q, dq, gripper_width, pos_ee, wrench_ext, buf32, buf) -> None:
+@njit(cache=True, inline="always")
+def push_features(q, dq, gripper_width, pos_ee, wrench_ext, m32, m) -> None:
     """Append one normalized float32 feature row [q, dq, width, p_ee, w_ext].
 
     The history (2L rows of F) stores row h twice (h and h + L), so the window oldest..newest
     is the contiguous block of rows head+1 .. head+L; the first push after a reset fills every
     row.
     """
-    m = unpack_model(buf)[0]
     n_rows, n_feat = int(m.history_length[0]), int(m.n_features[0])
-    m32 = unpack_model32(buf32, n_feat)
     offset, inv_scale, hist = m32.offset, m32.inv_scale, m32.hist
     h = int(m.head[0])
     row = hist[h * n_feat:(h + 1) * n_feat]
@@ -192,12 +190,11 @@ def mlp_forward(x, weights, biases, acts, out) -> None:
         src, width = half - src, width_out
 
 
-@njit(cache=True)
-def model_predict(buf32, weights, biases, buf) -> None:
+@njit(cache=True, inline="always")
+def model_predict(m32, weights, biases, m) -> None:
     """Forward pass on the current history window (all zeros before the first push)."""
-    m = unpack_model(buf)[0]
     n_rows, n_feat = int(m.history_length[0]), int(m.n_features[0])
-    hist = unpack_model32(buf32, n_feat).hist
+    hist = m32.hist
     start = ((int(m.head[0]) + n_rows - 1) % n_rows + 1) * n_feat
     pred = m.pred
     mlp_forward(hist[start:start + n_rows * n_feat], weights, biases, m.acts, pred)
@@ -217,13 +214,12 @@ def gate_update(is_open, surprise, slow_rate, open_n, release_n, slow_rate_max):
     return is_open, is_open and quasi_steady
 
 
-@njit(cache=True)
-def model_gate_step(wrench_slow, slow_rate, mask, buf) -> int:
+@njit(cache=True, inline="always")
+def model_gate_step(wrench_slow, slow_rate, mask, m) -> int:
     """Surprise over unmasked force axes, gate, replay/SGD schedule; returns STORE | TRAIN.
 
-    Call after this tick's prediction (``ModelState`` for the buffer).
+    Call after this tick's prediction; ``m`` is the ``ModelState``.
     """
-    m = unpack_model(buf)[0]
     pred = m.pred
     px = (pred[0] - wrench_slow[0]) * mask[0]
     py = (pred[1] - wrench_slow[1]) * mask[1]

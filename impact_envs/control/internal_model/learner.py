@@ -26,8 +26,6 @@ from numba import njit
 from impact_envs.control.internal_model.kernels import (
     dense,
     tanh_inplace,
-    unpack_model,
-    unpack_model32,
 )
 from impact_envs.control.kernel_layout import STORE, TRAIN
 
@@ -214,8 +212,8 @@ def continue_step(weights, biases, lrn) -> int:
     return _apply(weights, biases, lrn) if r1 == n else 0
 
 
-@njit(cache=True)
-def learner_tick(flags, wrench_slow, mask, buf32, buf, weights, biases, lrn) -> int:
+@njit(cache=True, inline="always")
+def learner_tick(flags, wrench_slow, mask, m32, m, weights, biases, lrn) -> int:
     """The replay insert / SGD schedule of ``flags`` (``model_gate_step``), in the kernel.
 
     Returns ``flags`` without STORE / TRAIN (done here), plus DIVERGED when a step applied on
@@ -224,10 +222,9 @@ def learner_tick(flags, wrench_slow, mask, buf32, buf, weights, biases, lrn) -> 
     if lrn.scal[IN_KERNEL] == 0.0:
         return flags
     if flags & (STORE | TRAIN):
-        m = unpack_model(buf)[0]
         out_scale = m.out_scale
         n_rows, n_feat = int(m.history_length[0]), int(m.n_features[0])
-        hist = unpack_model32(buf32, n_feat).hist
+        hist = m32.hist
         start = ((int(m.head[0]) + n_rows - 1) % n_rows + 1) * n_feat
         x = hist[start:start + n_rows * n_feat]
         target = lrn.target

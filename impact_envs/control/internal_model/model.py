@@ -116,7 +116,7 @@ class InternalModel:
         cfg = self.config
         L, F = cfg.history_length, FEATURE_DIM
         self._buf32 = np.zeros(kernels.model32_size(L, F), dtype=np.float32)
-        m32 = kernels.unpack_model32(self._buf32, F)
+        self.inputs = m32 = kernels.unpack_model32(self._buf32, F)
         offset, inv_scale, hist = m32.offset, m32.inv_scale, m32.hist
         offset[:] = FEATURE_OFFSET
         inv_scale[:] = 1.0 / FEATURE_SCALE
@@ -127,9 +127,9 @@ class InternalModel:
         self._windows = [self._hist[h + 1 : h + 1 + L].reshape(-1) for h in range(L)]
         width = max(cfg.hidden_sizes)
         self.buffer = np.zeros(kernels.model_size(width))
+        kernels.unpack_model(self.buffer)[0].max_hidden[0] = width  # sizes ``acts``: first
         self.state = m = kernels.unpack_model(self.buffer)[0]
-        m.max_hidden[0], m.open_n[0], m.release_n[0] = width, cfg.surprise_open_n, \
-            cfg.surprise_release_n
+        m.open_n[0], m.release_n[0] = cfg.surprise_open_n, cfg.surprise_release_n
         m.slow_rate_max[0], m.replay_period[0] = cfg.slow_rate_max, cfg.replay_period
         m.update_every[0], m.learning_enabled[0] = cfg.update_every, 1.0
         m.history_length[0], m.n_features[0] = L, F
@@ -217,7 +217,7 @@ class InternalModel:
         kernels.push_features(
             np.asarray(q, f64), np.asarray(dq, f64), float(gripper_width_m),
             np.asarray(pos_ee_world, f64), np.asarray(wrench_ext_world, f64),
-            self._buf32, self.buffer,
+            self.inputs, self.state,
         )  # fmt: skip
 
     def history_input(self) -> np.ndarray:
@@ -229,7 +229,7 @@ class InternalModel:
 
     def predict(self) -> np.ndarray:
         """Forward pass on the current history -> ``wrench_pred_world`` (6,) [N, Nm]."""
-        kernels.model_predict(*self.kernel_args()[:4])
+        kernels.model_predict(self.inputs, self._weights, self._biases, self.state)
         return self.wrench_pred_world
 
     def predict_torch(self, x: np.ndarray | None = None) -> np.ndarray:
@@ -259,7 +259,7 @@ class InternalModel:
         pred = self.predict()
         mask = self.mask_array(learn_mask)
         w_slow = np.asarray(wrench_slow_world, dtype=np.float64)
-        flags = kernels.model_gate_step(w_slow, float(slow_rate), mask, self.buffer)
+        flags = kernels.model_gate_step(w_slow, float(slow_rate), mask, self.state)
         if flags:
             self.learn(flags, w_slow, mask)
         return pred
