@@ -9,12 +9,39 @@ frame the controller tracks, not the robot's ``O_T_EE``.
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
 
 from impact_franka.fci import FrankaError
 from impact_franka.pick_place import Pose
+
+SHOULDER_M = np.array([0.0, 0.0, 0.333])
+"""The FR3's shoulder (joint 2's axis) in the base frame [m]."""
+REACH_M = 0.95
+"""Farthest TCP position accepted from the shoulder [m]: the FR3's 855 mm reach to the
+flange plus the Franka Hand's 103 mm, rounded down."""
+
+
+def check_reach(pos_m: np.ndarray, what: str) -> None:
+    """``FrankaError`` (one line) unless ``pos_m`` is finite and within ``REACH_M`` of the
+    shoulder."""
+    distance = float(np.linalg.norm(pos_m - SHOULDER_M))
+    if not distance <= REACH_M:
+        raise FrankaError(f"invalid {what} {np.round(pos_m, 4).tolist()}: {distance:.3f} m from "
+                          f"the shoulder; valid: within {REACH_M} m of (0, 0, 0.333) m")
+
+
+def check_writable(path: Path) -> None:
+    """Before anything moves: ``path`` can be written (its directory exists and is writable)
+    and, if it exists, holds taught poses (a pose recorded at the end is then not lost)."""
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir() or not os.access(folder, os.W_OK):
+        raise FrankaError(f"invalid --poses {path}: its directory is missing or not writable; "
+                          "valid: a file in a writable directory")
+    if path.exists():
+        _read(path)
 
 
 def save_pose(path: Path, name: str, pose: Pose, q: np.ndarray) -> None:
@@ -44,9 +71,12 @@ def resolve_pose(spec: str, path: Path | None, default_quat: np.ndarray) -> Pose
     parts = spec.split(",")
     if len(parts) == 3:
         try:
-            return Pose(np.array([float(p) for p in parts]), default_quat.copy())
+            pos = np.array([float(p) for p in parts])
         except ValueError:
-            pass
+            pos = None
+        if pos is not None:
+            check_reach(pos, "pose")
+            return Pose(pos, default_quat.copy())
     if path is None:
         raise FrankaError(f"invalid pose {spec!r}; valid: X,Y,Z in metres, or a name taught "
                           "into --poses FILE")
@@ -54,5 +84,18 @@ def resolve_pose(spec: str, path: Path | None, default_quat: np.ndarray) -> Pose
     if spec not in poses:
         raise FrankaError(f"invalid pose {spec!r}; valid: X,Y,Z in metres, or one of "
                           f"{', '.join(sorted(poses)) or '(none taught)'} in {path}")
-    entry = poses[spec]
-    return Pose(np.array(entry["pos_m"], dtype=float), np.array(entry["quat_wxyz"], dtype=float))
+    return _entry_pose(poses[spec], f"pose {spec!r} in {path}")
+
+
+def _entry_pose(entry: object, what: str) -> Pose:
+    """The ``Pose`` of a file entry, or ``FrankaError`` naming what is wrong with it."""
+    try:
+        pos = np.array(entry["pos_m"], dtype=float)  # type: ignore[index]
+        quat = np.array(entry["quat_wxyz"], dtype=float)  # type: ignore[index]
+    except (KeyError, TypeError, ValueError):
+        pos, quat = np.zeros(0), np.zeros(0)
+    if (pos.shape != (3,) or quat.shape != (4,) or not np.all(np.isfinite(pos))
+            or not np.all(np.isfinite(quat)) or not np.linalg.norm(quat) > 0.5):
+        raise FrankaError(f"invalid {what}; valid: pos_m (3 finite numbers) and quat_wxyz (a "
+                          "unit quaternion), as impact-robot teach writes them")
+    return Pose(pos, quat / np.linalg.norm(quat))

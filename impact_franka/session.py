@@ -39,8 +39,12 @@ def check_args(args: argparse.Namespace) -> None:
     step_at = getattr(args, "step_at_s", 0.0)
     if getattr(args, "step_m", None) is not None and not 0.0 <= step_at < args.seconds:
         raise ImpactError(f"invalid --step-at-s {step_at!r}; valid: 0 <= value < --seconds")
-    if args.command == "teach" and not args.float_seconds >= 0:
-        raise ImpactError(f"invalid --float-seconds {args.float_seconds!r}; valid: >= 0")
+    if args.command == "teach":
+        from impact_franka.poses import check_writable
+
+        if not args.float_seconds >= 0:
+            raise ImpactError(f"invalid --float-seconds {args.float_seconds!r}; valid: >= 0")
+        check_writable(args.poses)
     if args.command == "pick-place":
         _check_pick_place(args)
     budget = getattr(args, "budget_ms", 0.8)
@@ -69,11 +73,16 @@ def _check_pick_place(args: argparse.Namespace) -> None:
         if not low <= value <= high:
             flag = "--" + name.replace("_", "-")
             raise ImpactError(f"invalid {flag} {value!r}; valid: {low:g} to {high:g}")
+    import numpy as np
+
+    from impact_franka.poses import resolve_pose
+
     for flag in ("pick", "place"):
         spec = getattr(args, flag)
         if len(spec.split(",")) != 3 and args.poses is None:
             raise ImpactError(f"invalid --{flag} {spec!r}; valid: X,Y,Z in metres, or a pose "
                               "name with --poses FILE")
+        resolve_pose(spec, args.poses, np.array([1.0, 0.0, 0.0, 0.0]))  # names, file, reach
 
 
 @contextlib.contextmanager

@@ -240,6 +240,7 @@ def test_a_failed_grasp_retreats_and_is_named() -> None:
     (["--pick", "home"], "invalid --pick 'home'; valid: X,Y,Z in metres, or a pose name"),
     (["--grasp-width-m", "0.2"], "invalid --grasp-width-m 0.2; valid: 0 to 0.08"),
     (["--speed-m-s", "3"], "invalid --speed-m-s 3.0; valid: 0.01 to 0.5"),
+    (["--pick", "1.5,0,0.3"], "from the shoulder; valid: within 0.95 m of (0, 0, 0.333) m"),
 ])
 def test_bad_pick_place_arguments_are_one_line_before_connecting(argv, message,
                                                                   capsys) -> None:
@@ -261,3 +262,25 @@ def test_a_missing_extra_is_one_line(monkeypatch, capsys) -> None:
     assert main(["check", "--host", "127.0.0.1"]) == 1
     err = capsys.readouterr().err
     assert err == "impact-robot: impact-robot needs pylibfranka: pip install -e '.[franka]'\n"
+
+
+def test_taught_pose_files_are_checked_before_connecting(tmp_path, capsys) -> None:
+    """teach refuses a --poses it could not write (the pose recorded at the end would be
+    lost); pick-place refuses an unknown name and a damaged entry, each in one line, before
+    connecting (192.0.2.1 is never dialled)."""
+    from impact_franka.cli import main
+
+    poses = tmp_path / "poses.json"
+    poses.write_text('{"pick": {"pos_m": [0.5, 0.0], "quat_wxyz": [0, 1, 0, 0]}}')
+    cases = [
+        (["teach", "--host", "192.0.2.1", "--poses", str(tmp_path / "no" / "p.json"),
+          "--name", "a"], "its directory is missing or not writable"),
+        (["pick-place", "--host", "192.0.2.1", "--poses", str(poses), "--pick", "pik",
+          "--place", "0.5,0.1,0.3"], "valid: X,Y,Z in metres, or one of pick in"),
+        (["pick-place", "--host", "192.0.2.1", "--poses", str(poses), "--pick", "pick",
+          "--place", "0.5,0.1,0.3"], "invalid pose 'pick' in"),
+    ]
+    for argv, message in cases:
+        assert main(argv) == 1
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err, err
