@@ -53,7 +53,8 @@ def check_env_id(env_id: str) -> str:
 
 
 def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
-             preset: str = "default", render: bool = False) -> gym.Env:
+             preset: str = "default", render: bool = False,
+             observation: object | None = None) -> gym.Env:
     """``gym.make(env_id, controller=controller, controller_preset=preset)``, errors turned
     into ``ImpactError``.
 
@@ -70,6 +71,8 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
         extra["controller_preset"] = preset
     elif preset != "default":
         extra["controller_preset"] = preset
+    if observation is not None:
+        extra["observation"] = observation  # an ObservationOptions (camera methods)
     if overrides:
         from impact_envs.control.overrides import apply_overrides
         from impact_envs.control.presets import preset_config
@@ -187,7 +190,7 @@ def method_env(env_id: str, spec: object, overrides: Sequence[str] = (),
     """``make_env`` for a method: its controller and preset, wrapped in
     ``impact_envs.wrappers.RLActions`` when the method acts in one of its modes (an SB3 model
     trained on the wrapper)."""
-    env = make_env(env_id, spec.controller, overrides, spec.preset, render)
+    env = make_env(env_id, spec.controller, overrides, spec.preset, render, spec.observation)
     if spec.action_mode is None:
         return env
     from impact_envs.wrappers import RLActions

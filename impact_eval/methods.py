@@ -14,6 +14,8 @@ machinery tested) without the scripted experts, diffusion policies or Stable-Bas
 | `impact_vanilla`  | DP checkpoint `<env>/vanilla`            | `impact`    |
 | `impact_paper`    | DP checkpoint `<env>/vanilla`            | `impact`, preset `paper` |
 | `impact_warm`     | as `impact`, warm internal model         | `impact`    |
+| `vanilla_dp_rgb`  | visuomotor DP checkpoint `<env>/vanilla_rgb`, cameras only | `impedance` |
+| `impact_rgb`      | the same checkpoint                      | `impact`    |
 | `scripted_impact_paper` | scripted expert                    | `impact`, preset `paper` |
 | `sb3:<path.zip>`  | any SB3 algorithm's policy, deterministic (``sb3.py``) | `impact` |
 | `sb3_impedance:<path.zip>` | the same | `impedance` |
@@ -32,6 +34,7 @@ import gymnasium as gym
 
 from impact_envs.control.controller import CONTROLLERS
 from impact_envs.control.presets import PRESETS
+from impact_envs.envs.options import ObservationOptions
 from impact_envs.errors import CheckpointError, InvalidArgumentError, check_choice
 from impact_envs.policies.interface import Policy
 from impact_eval.sb3 import load_sb3, sb3_action_mode
@@ -63,11 +66,14 @@ class MethodSpec:
     of the same cell ("warm robot", the paper's Phase B; docs/eval.md)."""
     action_mode: str | None = None
     """``impact_envs.wrappers.RLActions`` mode the policy acts in (None: the env's own)."""
+    observation: ObservationOptions | None = None
+    """What the env observes (``gym.make(..., observation=...)``); None: the state."""
 
     @property
-    def env_key(self) -> tuple[str, str, str | None]:
-        """(controller, preset, action mode): methods with equal keys can share envs."""
-        return self.controller, self.preset, self.action_mode
+    def env_key(self) -> tuple[str, str, str | None, ObservationOptions | None]:
+        """(controller, preset, action mode, observation): methods with equal keys can share
+        envs."""
+        return self.controller, self.preset, self.action_mode, self.observation
 
 
 _REGISTRY: dict[str, MethodSpec] = {}
@@ -195,6 +201,12 @@ def _build_impact_dp(env_id: str, env: gym.Env) -> Policy:
     return _dp_factory("impact")(env_id, env)
 
 
+RGB_OBSERVATION = ObservationOptions(obs_mode="rgb", cameras=("overview", "wrist"),
+                                     image_width=96, image_height=96, shadows=False)
+"""Observation of the ``*_rgb`` methods: the two cameras the shipped visuomotor checkpoint was
+trained on, 96 x 96, without shadows (docs/diffusion_policy.md, "Visuomotor policy")."""
+
+
 for _spec in (
     MethodSpec("scripted", "impedance", _build_scripted, "scripted expert, impedance control"),
     MethodSpec("scripted_impact", "impact", _build_scripted, "scripted expert, IMPACT control"),
@@ -214,5 +226,10 @@ for _spec in (
                "Vanilla DP + IMPACT controller, paper preset", preset="paper"),
     MethodSpec("impact_warm", "impact", _build_impact_dp,
                "Vanilla DP + IMPACT controller, internal model warmed up on the cell", warm=True),
+    MethodSpec("vanilla_dp_rgb", "impedance", _dp_factory("vanilla_rgb"),
+               "visuomotor Vanilla DP (cameras + the robot's own state), impedance",
+               observation=RGB_OBSERVATION),
+    MethodSpec("impact_rgb", "impact", _dp_factory("vanilla_rgb"),
+               "visuomotor Vanilla DP + IMPACT controller", observation=RGB_OBSERVATION),
 ):
     register_method(_spec)

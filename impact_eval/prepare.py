@@ -151,8 +151,8 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
         for spec in specs:
             if spec.env_key not in envs:
                 envs[spec.env_key] = make_env(
-                    req.env_id, spec.controller, req.controller_overrides, spec.preset
-                )
+                    req.env_id, spec.controller, req.controller_overrides, spec.preset,
+                    observation=spec.observation)
         first = next(iter(envs.values()))
         info = describe_env(first, req.param)
         check_param(info, req.param)

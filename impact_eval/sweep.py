@@ -98,7 +98,7 @@ class Worker:
 
         import_env_module(cfg.env_id)
         self.cfg = cfg
-        self.envs: dict[tuple[str, str], list[object]] = {}
+        self.envs: dict[tuple, list[object]] = {}
         self.policies: dict[str, Policy] = {}
         self.warm: dict[tuple[str, float], object] = {}
 

@@ -1,4 +1,4 @@
-"""Demonstration storage (Diffusion Policy's zarr replay layout) and the windowed sampler.
+"""Demonstration storage (Diffusion Policy's zarr replay layout); training windows: windows.py.
 
 Layout of ``DATA.zarr``::
 
@@ -27,7 +27,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
 import zarr
 from zarr.codecs import ZstdCodec
 
@@ -270,59 +269,3 @@ def load_replay(path: str | Path) -> ReplayData:
     if any(len(a) < n_steps for a in data.values()):
         raise InvalidArgumentError(f"{path} is truncated: arrays shorter than episode_ends says")
     return ReplayData(data, ends, meta, dict(root.attrs))
-
-
-def window_indices(
-    episode_ends: np.ndarray, episodes: Sequence[int], n_obs_steps: int, horizon: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """Global step indices of every training window, with DP-style edge padding.
-
-    There is one window per step t of each episode: observations t-To+1..t and actions
-    t-To+1..t-To+Tp, clamped into the episode (repeat the first step before the start, the
-    last step after the end). Action To-1 of a window is the one taken at the current step t.
-
-    Returns:
-        ``obs_idx`` ``(W, To)`` and ``act_idx`` ``(W, Tp)`` int64 indices into the N axis.
-    """
-    starts = np.concatenate([[0], episode_ends[:-1]])
-    obs_rows, act_rows = [], []
-    for ep in episodes:
-        start, end = int(starts[ep]), int(episode_ends[ep])
-        t = np.arange(start, end)[:, None]
-        first = t - (n_obs_steps - 1)
-        obs_rows.append(np.clip(first + np.arange(n_obs_steps), start, end - 1))
-        act_rows.append(np.clip(first + np.arange(horizon), start, end - 1))
-    if not obs_rows:
-        return np.zeros((0, n_obs_steps), np.int64), np.zeros((0, horizon), np.int64)
-    return np.concatenate(obs_rows).astype(np.int64), np.concatenate(act_rows).astype(np.int64)
-
-
-class WindowSampler:
-    """Random or indexed access to normalized training windows.
-
-    Args:
-        obs: Normalized flat observations ``(N, D_obs)``.
-        actions: Normalized actions ``(N, 10)``.
-        obs_idx: ``(W, To)`` from ``window_indices``.
-        act_idx: ``(W, Tp)`` from ``window_indices``.
-    """
-
-    def __init__(
-        self, obs: torch.Tensor, actions: torch.Tensor, obs_idx: np.ndarray, act_idx: np.ndarray
-    ) -> None:
-        self.obs, self.actions = obs, actions
-        self.obs_idx = torch.as_tensor(obs_idx, dtype=torch.long)
-        self.act_idx = torch.as_tensor(act_idx, dtype=torch.long)
-
-    def __len__(self) -> int:
-        return int(self.obs_idx.shape[0])
-
-    def get(self, windows: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """Return ``(obs (B, To, D_obs), actions (B, Tp, 10))`` of window ids ``(B,)``."""
-        return self.obs[self.obs_idx[windows]], self.actions[self.act_idx[windows]]
-
-    def sample(
-        self, batch_size: int, generator: torch.Generator
-    ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Draw ``batch_size`` windows uniformly with replacement."""
-        return self.get(torch.randint(len(self), (batch_size,), generator=generator))

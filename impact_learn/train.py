@@ -1,4 +1,4 @@
-"""``impact-train``: train a state-based Diffusion Policy on a demonstration store.
+"""``impact-train``: train a Diffusion Policy (state-based or visuomotor) on a demonstration store.
 
 Usage::
 
@@ -25,7 +25,7 @@ import torch
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError, TrainingError
 from impact_envs.policies.diffusion.config import DiffusionConfig
-from impact_envs.policies.diffusion.model import diffusion_loss, make_network
+from impact_envs.policies.diffusion.model import diffusion_loss, encode, make_network
 from impact_envs.policies.diffusion.normalizer import Normalizer
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
 from impact_learn.ema import EMA
@@ -90,8 +90,9 @@ def init_state(cfg: DiffusionConfig, obs_dim: int) -> TrainState:
 
 def train_step(state: TrainState, data: TrainData, cfg: DiffusionConfig, lr: float) -> float:
     """One AdamW step on a random batch; returns the batch loss."""
-    obs, actions = data.train.sample(cfg.batch_size, state.generator)
-    loss = diffusion_loss(state.net, data.scheduler, obs, actions, state.generator)
+    batch = data.train.sample(cfg.batch_size, state.generator)
+    cond = encode(state.net, batch.obs, batch.images, state.generator)
+    loss = diffusion_loss(state.net, data.scheduler, cond, batch.actions, state.generator)
     if not torch.isfinite(loss):
         raise TrainingError(
             f"non-finite loss at step {state.step + 1}; stopped before updating the weights "

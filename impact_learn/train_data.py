@@ -15,13 +15,8 @@ from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.model import make_train_scheduler
 from impact_envs.policies.diffusion.normalizer import Normalizer
 from impact_envs.policies.diffusion.policy import GRIPPER_DIM
-from impact_learn.dataset import (
-    ACTION_KEY,
-    ReplayData,
-    WindowSampler,
-    load_replay,
-    window_indices,
-)
+from impact_learn.dataset import ACTION_KEY, ReplayData, load_replay
+from impact_learn.windows import WindowSampler, window_indices
 
 
 @dataclass(frozen=True)
@@ -84,6 +79,25 @@ def _check_finite(replay: ReplayData, keys: tuple[str, ...], path: Path) -> None
                 "refusing to train on them")
 
 
+def _images(cfg: DiffusionConfig, replay: ReplayData, path: Path) -> dict[str, torch.Tensor]:
+    """The ``(N, H, W, 3)`` uint8 frames of ``cfg.vision``'s cameras (none without vision)."""
+    if cfg.vision is None:
+        return {}
+    keys = cfg.vision.image_keys
+    stored = sorted(k for k, a in replay.data.items() if a.ndim == 4)
+    missing = [k for k in keys if k not in stored]
+    if missing:
+        valid = ", ".join(stored) or "none (a state store: impact-collect --obs-mode rgb)"
+        raise InvalidArgumentError(
+            f"{path} holds no images {missing}; valid image keys: {valid}")
+    wrong = [k for k in keys
+             if replay.data[k].dtype != np.uint8 or replay.data[k].shape[-1] != 3]
+    if wrong:
+        raise InvalidArgumentError(
+            f"images {wrong} of {path} are not RGB uint8 (H, W, 3); valid: '<camera>_rgb' keys")
+    return {k: torch.from_numpy(replay.data[k]) for k in keys}
+
+
 def load_train_data(cfg: DiffusionConfig, path: Path, val_fraction: float) -> TrainData:
     """Load ``path``, split episodes, fit the normalizer on the training part."""
     replay = load_replay(path)
@@ -98,9 +112,11 @@ def load_train_data(cfg: DiffusionConfig, path: Path, val_fraction: float) -> Tr
     obs_n = normalizer.obs.forward(torch.from_numpy(obs))
     act_n = normalizer.action.forward(torch.from_numpy(np.asarray(actions, np.float32)))
 
+    images = _images(cfg, replay, path)
+
     def sampler(episodes: list) -> WindowSampler:
         idx = window_indices(replay.episode_ends, episodes, cfg.n_obs_steps, cfg.horizon)
-        return WindowSampler(obs_n, act_n, *idx)
+        return WindowSampler(obs_n, act_n, *idx, images=images)
 
     info = {
         "path": str(path),

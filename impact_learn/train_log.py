@@ -10,11 +10,12 @@ from tqdm import tqdm
 
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.model import (
+    DiffusionNet,
     denoise,
     diffusion_loss,
+    encode,
     make_inference_scheduler,
 )
-from impact_envs.policies.diffusion.network import ConditionalUnet1D
 from impact_learn.train_data import TrainData
 
 LOG_COLUMNS = ("step", "lr", "train_loss", "val_loss", "val_action_mse", "elapsed_s")
@@ -26,7 +27,7 @@ VAL_SEED = 1234
 
 @torch.no_grad()
 def evaluate(
-    net: ConditionalUnet1D, data: TrainData, cfg: DiffusionConfig, max_windows: int = 256
+    net: DiffusionNet, data: TrainData, cfg: DiffusionConfig, max_windows: int = 256
 ) -> dict[str, float]:
     """Held-out denoising loss and DDIM action MSE on a fixed subset of held-out windows.
 
@@ -35,8 +36,10 @@ def evaluate(
     if data.val is None or len(data.val) == 0:
         return {}
     n = min(max_windows, len(data.val))
-    obs, actions = data.val.get(torch.linspace(0, len(data.val) - 1, n).long())
+    batch = data.val.get(torch.linspace(0, len(data.val) - 1, n).long())
+    actions = batch.actions
     generator = torch.Generator().manual_seed(VAL_SEED)
+    obs = encode(net, batch.obs, batch.images)  # the EMA copy is in eval mode: centre crops
     val_loss = diffusion_loss(net, data.scheduler, obs, actions, generator)
     noise = torch.randn(actions.shape, generator=generator)
     sample = denoise(net, make_inference_scheduler(cfg), obs, noise)

@@ -21,7 +21,7 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from impact_envs.errors import CheckpointError
-from impact_envs.policies.diffusion.network import ConditionalUnet1D
+from impact_envs.policies.diffusion.model import DiffusionNet
 from impact_learn.ema import EMA
 
 TENSORS_FILE = "tensors.safetensors"
@@ -33,7 +33,7 @@ class TrainState:
     """Everything that changes while training.
 
     Attributes:
-        net: Trained U-Net.
+        net: Trained network (U-Net, or camera encoder + U-Net).
         ema: EMA of ``net`` (the weights that are evaluated and shipped).
         optimizer: AdamW over ``net``'s parameters.
         generator: Source of batch indices, diffusion steps and noise.
@@ -41,7 +41,7 @@ class TrainState:
         info: JSON-serialisable run information (best validation score, ...).
     """
 
-    net: ConditionalUnet1D
+    net: DiffusionNet
     ema: EMA
     optimizer: torch.optim.Optimizer
     generator: torch.Generator

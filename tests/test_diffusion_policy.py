@@ -52,9 +52,9 @@ def test_first_observation_is_repeated():
     policy.reset(2)
     obs = _obs(policy, 2, 0)
     policy.act(obs)
-    assert torch.equal(policy._history[:, 0], policy._history[:, 1])
+    assert torch.equal(policy._history.state[:, 0], policy._history.state[:, 1])
     policy.act(_obs(policy, 2, 1))
-    assert not torch.equal(policy._history[:, 0], policy._history[:, 1])
+    assert not torch.equal(policy._history.state[:, 0], policy._history.state[:, 1])
 
 
 @pytest.mark.parametrize("batch_invariant", [True, False])

@@ -17,9 +17,9 @@ from impact_learn.dataset import (
     EpisodeMeta,
     ReplayWriter,
     load_replay,
-    window_indices,
 )
 from impact_learn.ema import EMA
+from impact_learn.windows import window_indices
 
 torch.set_num_threads(1)
 

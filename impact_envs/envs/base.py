@@ -141,6 +141,8 @@ class ImpactEnv(gym.Env):
         )
         self._state_space = self._make_observation_space()
         obs_opts = observation or ObservationOptions()
+        self.observation_options = obs_opts
+        """What the observation holds (``ObservationOptions``; ``"state"`` mode by default)."""
         self._pixels = (PixelObservations(self.sim.model, task, obs_opts, self._state_space)
                         if obs_opts.uses_images else None)
         """Camera images in the observation (``envs/pixels.py``); None in ``"state"`` mode."""

@@ -2,7 +2,8 @@
 
 ``DiffusionPolicy.load`` checks that a checkpoint is internally consistent. This module checks
 that it fits an env: finite weights and normalizer, the task it was trained on (the demos'
-``env_id``), its observation keys and sizes, and its action size. Any mismatch is one
+``env_id``), its observation keys and sizes, its action size, and for a visuomotor checkpoint
+the cameras, image size and shadows it was trained with. Any mismatch is one
 ``CheckpointError`` line, raised before an episode runs.
 """
 
@@ -46,9 +47,33 @@ def check_policy_env(policy: DiffusionPolicy, env_id: str, env: gym.Env, where: 
         if size != dim:
             raise CheckpointError(
                 f"checkpoint {where} expects {key!r} of size {dim}, the env gives {size}")
+    _check_cameras(policy, env, where)
     action_dim = int(np.prod(env.action_space.shape))
     checkpoint_dim = int(policy.meta.get("action_dim", action_dim))
     if checkpoint_dim != action_dim:
         raise CheckpointError(
             f"checkpoint {where} outputs {checkpoint_dim} action values, the env takes "
             f"{action_dim}")
+
+
+CAMERA_FIELDS = ("cameras", "image_width", "image_height", "shadows")
+"""What a visuomotor checkpoint's images depend on (the store's ``observation`` attribute)."""
+
+
+def _check_cameras(policy: DiffusionPolicy, env: gym.Env, where: str) -> None:
+    """A visuomotor checkpoint runs only on the camera setup of its demos."""
+    if policy.cfg.vision is None:
+        return
+    attrs = policy.meta.get("dataset", {}).get("attrs", {})
+    trained = attrs.get("observation") if isinstance(attrs, dict) else None
+    options = getattr(env.unwrapped, "observation_options", None)
+    if not isinstance(trained, dict) or options is None:
+        return  # a checkpoint or env that does not say: the keys and sizes were checked
+    for name in CAMERA_FIELDS:
+        have, want = getattr(options, name), trained.get(name)
+        if name == "cameras":
+            have = list(have)
+        if want is not None and have != want:
+            raise CheckpointError(
+                f"checkpoint {where} was trained with {name}={want!r}, the env renders "
+                f"{name}={have!r}; make the env with those ObservationOptions")

@@ -1,4 +1,5 @@
-"""Hyper-parameters of the state-based Diffusion Policy baseline.
+"""Hyper-parameters of the Diffusion Policy baselines (state-based, or visuomotor with
+``DiffusionConfig.vision`` set).
 
 Defaults follow the CPU recipe (docs/diffusion_policy.md): Diffusion Policy's low-dim U-Net
 recipe (Chi et al.) with a smaller net ``(64, 128, 256)`` and DDIM-10 sampling. Times are in
@@ -66,6 +67,9 @@ class DiffusionConfig:
         ema_min: Lower bound of the EMA decay.
         ema_max: Upper bound of the EMA decay.
         seed: Seed of weight initialization, batch sampling and training noise.
+        vision: Camera encoder of a visuomotor policy (``ImageEncoderConfig``; in JSON an
+            object of its fields), or None for a state-based policy. With it, ``obs_keys`` are
+            the robot's own entries and the cameras' features join them per step.
     """
 
     obs_keys: tuple[str, ...] = DEFAULT_OBS_KEYS
@@ -93,8 +97,15 @@ class DiffusionConfig:
     ema_min: float = 0.0
     ema_max: float = 0.9999
     seed: int = 0
+    vision: ImageEncoderConfig | None = None
 
     def __post_init__(self) -> None:
+        if isinstance(self.vision, dict):
+            object.__setattr__(self, "vision", ImageEncoderConfig.from_dict(self.vision))
+        if self.vision is not None and not isinstance(self.vision, ImageEncoderConfig):
+            raise InvalidArgumentError(
+                f"invalid DiffusionConfig field vision: {self.vision!r}; valid: null or an "
+                "object of ImageEncoderConfig fields")
         object.__setattr__(self, "obs_keys", tuple(self.obs_keys))
         object.__setattr__(self, "down_dims", tuple(int(d) for d in self.down_dims))
         object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
@@ -147,8 +158,14 @@ class DiffusionConfig:
         return 2 ** (len(self.down_dims) - 1)
 
     def to_dict(self) -> dict[str, Any]:
-        """Return a JSON-serialisable dict (tuples become lists)."""
-        return {k: list(v) if isinstance(v, tuple) else v for k, v in self._items()}
+        """Return a JSON-serialisable dict (tuples become lists). A state-based config has no
+        ``vision`` entry, so its file reads as before visuomotor policies existed."""
+        out = {k: list(v) if isinstance(v, tuple) else v for k, v in self._items()}
+        if self.vision is None:
+            del out["vision"]
+        else:
+            out["vision"] = self.vision.to_dict()
+        return out
 
     def _items(self) -> list[tuple[str, Any]]:
         return [(f.name, getattr(self, f.name)) for f in dataclasses.fields(self)]
@@ -230,6 +247,24 @@ class ImageEncoderConfig:
             raise InvalidArgumentError(
                 f"invalid keypoints {self.keypoints} or feature_dim {self.feature_dim}; "
                 "valid: >= 1")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-serialisable fields (tuples become lists)."""
+        return {f.name: list(v) if isinstance(v := getattr(self, f.name), tuple) else v
+                for f in dataclasses.fields(self)}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ImageEncoderConfig:
+        """Build from ``to_dict`` output; unknown keys or wrong types are one-line errors."""
+        names = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(set(data) - set(names))
+        if unknown:
+            raise InvalidArgumentError(
+                f"unknown vision keys {unknown}; valid keys: {', '.join(names)}")
+        defaults = cls()
+        for name, value in data.items():
+            _check_field_type(f"vision.{name}", value, getattr(defaults, name))
+        return cls(**data)
 
     def crop_size(self, height: int, width: int) -> tuple[int, int]:
         """Crop ``(height, width)`` [px] of an image of that size."""

@@ -7,26 +7,45 @@ All tensors here live in normalized space (see normalizer.py).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import torch
 from diffusers import DDIMScheduler, DDPMScheduler
+from torch import nn
 
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.network import ConditionalUnet1D
+from impact_envs.policies.diffusion.vision import ObservationEncoder, VisuomotorNet
 from impact_envs.policies.interface import ACTION_DIM
 
+DiffusionNet = ConditionalUnet1D | VisuomotorNet
+"""A state-based policy's U-Net, or a visuomotor policy's encoder + U-Net."""
 
-def make_network(cfg: DiffusionConfig, obs_dim: int) -> ConditionalUnet1D:
-    """Build the U-Net for ``obs_dim``-dimensional states, conditioned on ``To`` of them."""
-    return ConditionalUnet1D(
+
+def make_network(cfg: DiffusionConfig, obs_dim: int) -> DiffusionNet:
+    """Build the network for ``obs_dim``-dimensional states (plus ``cfg.vision``'s cameras),
+    conditioned on ``To`` steps of them."""
+    encoder = ObservationEncoder(cfg.vision, obs_dim) if cfg.vision is not None else None
+    step_dim = encoder.out_dim if encoder is not None else obs_dim
+    unet = ConditionalUnet1D(
         action_dim=ACTION_DIM,
-        global_cond_dim=cfg.n_obs_steps * obs_dim,
+        global_cond_dim=cfg.n_obs_steps * step_dim,
         down_dims=cfg.down_dims,
         kernel_size=cfg.kernel_size,
         n_groups=cfg.n_groups,
         step_embed_dim=cfg.diffusion_step_embed_dim,
     )
+    return unet if encoder is None else VisuomotorNet(encoder, unet)
+
+
+def encode(net: nn.Module, obs: torch.Tensor, images: Mapping[str, torch.Tensor],
+           generator: torch.Generator | None = None) -> torch.Tensor:
+    """The per-step condition ``(B, To, C)`` of a normalized state history ``obs``
+    ``(B, To, D)``: the state itself, or with a ``VisuomotorNet`` the state and its images'
+    features (random crops from ``generator`` while ``net`` is in training mode)."""
+    if isinstance(net, VisuomotorNet):
+        return net.encode(obs, images, generator)
+    return obs
 
 
 def make_train_scheduler(cfg: DiffusionConfig) -> DDPMScheduler:
@@ -55,7 +74,7 @@ def make_inference_scheduler(cfg: DiffusionConfig) -> DDIMScheduler:
 
 
 def diffusion_loss(
-    net: ConditionalUnet1D,
+    net: nn.Module,
     scheduler: DDPMScheduler,
     obs: torch.Tensor,
     actions: torch.Tensor,
@@ -64,9 +83,9 @@ def diffusion_loss(
     """Denoising MSE of one batch.
 
     Args:
-        net: The U-Net.
+        net: The U-Net (or a ``VisuomotorNet``: its forward is its U-Net's).
         scheduler: Training scheduler (``add_noise``).
-        obs: Normalized observation history ``(B, To, D_obs)``.
+        obs: Per-step condition ``(B, To, C)``: the normalized state history, or ``encode``'s.
         actions: Normalized action sequence ``(B, Tp, 10)``.
         generator: Source of the noise and diffusion steps.
 
@@ -92,7 +111,8 @@ def denoise(
     obs: torch.Tensor,
     noise: torch.Tensor,
 ) -> torch.Tensor:
-    """Run the reverse process from ``noise`` ``(B, Tp, 10)`` given ``obs`` ``(B, To, D)``.
+    """Run the reverse process from ``noise`` ``(B, Tp, 10)`` given ``obs`` ``(B, To, C)``
+    (the per-step condition, as in ``diffusion_loss``).
 
     ``net`` is the U-Net or a traced copy of it (``inference.frozen_unet``).
 

@@ -30,10 +30,17 @@ from safetensors.torch import load_file, save_file
 import impact_envs
 from impact_envs.errors import CheckpointError, InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
+from impact_envs.policies.diffusion.history import ObservationHistory
 from impact_envs.policies.diffusion.inference import UNetForward, frozen_unet
-from impact_envs.policies.diffusion.model import denoise, make_inference_scheduler, make_network
-from impact_envs.policies.diffusion.network import ConditionalUnet1D
+from impact_envs.policies.diffusion.model import (
+    DiffusionNet,
+    denoise,
+    encode,
+    make_inference_scheduler,
+    make_network,
+)
 from impact_envs.policies.diffusion.normalizer import Normalizer
+from impact_envs.policies.diffusion.vision import VisuomotorNet
 from impact_envs.policies.interface import ACTION_DIM
 
 MODEL_FILE = "model.safetensors"
@@ -69,11 +76,12 @@ def env_generator(seed: int, *keys: int) -> torch.Generator:
 
 
 class DiffusionPolicy:
-    """State-based Diffusion Policy implementing the ``Policy`` protocol.
+    """Diffusion Policy (state-based, or visuomotor with ``cfg.vision``) implementing the
+    ``Policy`` protocol.
 
     Args:
-        cfg: Hyper-parameters (obs keys, To, Tp, Ta, DDIM steps).
-        net: The (EMA) U-Net.
+        cfg: Hyper-parameters (obs keys, To, Tp, Ta, DDIM steps, cameras).
+        net: The (EMA) U-Net, or camera encoder + U-Net (``VisuomotorNet``).
         normalizer: Observation/action normalizer of the training set.
         obs_dims: ``{obs_key: d_key}`` for ``cfg.obs_keys`` (order given by ``cfg.obs_keys``).
         seed: Seed of the sampling noise; reapplied at every ``reset``.
@@ -88,7 +96,7 @@ class DiffusionPolicy:
     def __init__(
         self,
         cfg: DiffusionConfig,
-        net: ConditionalUnet1D,
+        net: DiffusionNet,
         normalizer: Normalizer,
         obs_dims: Mapping[str, int],
         *,
@@ -118,8 +126,9 @@ class DiffusionPolicy:
             raise InvalidArgumentError(f"n_envs must be >= 1, got {n_envs}")
         cfg = self.cfg
         self.n_envs = n_envs
-        self._history = torch.zeros(n_envs, cfg.n_obs_steps, self.normalizer.obs.dim)
-        self._fresh = np.ones(n_envs, dtype=bool)
+        image_keys = cfg.vision.image_keys if cfg.vision is not None else ()
+        self._history = ObservationHistory(n_envs, cfg.n_obs_steps, self.normalizer.obs.dim,
+                                           image_keys)
         self._queue = np.zeros((n_envs, cfg.n_action_steps, ACTION_DIM), dtype=np.float32)
         self._queue_pos = np.full(n_envs, cfg.n_action_steps)
         self._live = np.ones(n_envs, dtype=bool)
@@ -137,7 +146,7 @@ class DiffusionPolicy:
 
     def reset_envs(self, indices: np.ndarray | list[int]) -> None:
         """Start a new episode in envs ``indices`` only (their generators continue)."""
-        self._fresh[indices] = True
+        self._history.mark_fresh(indices)
         self._live[indices] = True
         self._queue_pos[indices] = self.cfg.n_action_steps
 
@@ -157,7 +166,7 @@ class DiffusionPolicy:
             if self.n_envs:
                 raise InvalidArgumentError(f"got {flat.shape[0]} envs, reset was for {self.n_envs}")
             self.reset(flat.shape[0])
-        self._push_history(flat)
+        self._history.push(flat, obs)
         steps = self.cfg.n_action_steps
         replan = np.flatnonzero((self._queue_pos >= steps) & self._live)
         if replan.size:
@@ -177,13 +186,6 @@ class DiffusionPolicy:
         parts = [np.asarray(obs[k], dtype=np.float32) for k in self.cfg.obs_keys]
         parts = [p.reshape(p.shape[0], -1) for p in parts]
         return torch.from_numpy(np.concatenate(parts, axis=1))
-
-    def _push_history(self, flat: torch.Tensor) -> None:
-        self._history = torch.roll(self._history, shifts=-1, dims=1)
-        self._history[:, -1] = flat
-        fresh = torch.from_numpy(self._fresh)
-        self._history[fresh] = flat[fresh].unsqueeze(1).expand(-1, self.cfg.n_obs_steps, -1)
-        self._fresh[:] = False
 
     def predict_chunk(self, envs: np.ndarray) -> np.ndarray:
         """Sample and return the ``(len(envs), Ta, 10)`` actions to execute for ``envs``.
@@ -211,14 +213,19 @@ class DiffusionPolicy:
         """Normalized ``(len(envs), Tp, 10)`` action sequences, one call, each env's noise."""
         shape = (self.cfg.horizon, ACTION_DIM)
         noise = torch.stack([torch.randn(shape, generator=self._generators[i]) for i in envs])
-        obs = self.normalizer.obs.forward(self._history[torch.as_tensor(envs)])
-        return denoise(net, self.scheduler, obs, noise)
+        rows = torch.as_tensor(envs)
+        state = self.normalizer.obs.forward(self._history.state[rows])
+        cond = encode(self.net, state, self._history.images_of(rows))  # eval: centre crops
+        return denoise(net, self.scheduler, cond, noise)
 
     def _unet(self) -> UNetForward:
         """The batch-of-one network: frozen when that is bit-identical (inference.py)."""
         if self._unet_one is None:
-            cond_dim = self.cfg.n_obs_steps * self.normalizer.obs.dim
-            self._unet_one = frozen_unet(self.net, self.cfg.horizon, ACTION_DIM, cond_dim)
+            visuomotor = isinstance(self.net, VisuomotorNet)
+            unet = self.net.unet if visuomotor else self.net
+            step_dim = self.net.encoder.out_dim if visuomotor else self.normalizer.obs.dim
+            cond_dim = self.cfg.n_obs_steps * step_dim
+            self._unet_one = frozen_unet(unet, self.cfg.horizon, ACTION_DIM, cond_dim)
         return self._unet_one
 
     def save(self, directory: str | Path) -> None:

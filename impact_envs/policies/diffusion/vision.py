@@ -129,3 +129,26 @@ class ObservationEncoder(nn.Module):
             x = crop(x, size, self.training, generator)
             parts.append(encoder(x).reshape(b, t, -1))
         return torch.cat(parts, dim=-1)
+
+
+class VisuomotorNet(nn.Module):
+    """A visuomotor policy's network: the camera encoder and the denoising U-Net, trained
+    together (one optimizer, one EMA, one checkpoint: ``encoder.*`` and ``unet.*``).
+
+    ``encode`` turns the normalized state history and its images into the condition; the call
+    then denoises exactly as the state-based U-Net does (``net(sample, step, cond)``).
+    """
+
+    def __init__(self, encoder: ObservationEncoder, unet: nn.Module) -> None:
+        super().__init__()
+        self.encoder, self.unet = encoder, unet
+
+    def encode(self, state: torch.Tensor, images: Mapping[str, torch.Tensor],
+               generator: torch.Generator | None = None) -> torch.Tensor:
+        """``(B, To, D)`` state and ``(B, To, H, W, 3)`` uint8 images -> ``(B, To, C)``."""
+        return self.encoder(state, images, generator)
+
+    def forward(self, sample: torch.Tensor, timestep: torch.Tensor | int,
+                global_cond: torch.Tensor) -> torch.Tensor:
+        """The U-Net's prediction for an already encoded condition ``(B, To * C)``."""
+        return self.unet(sample, timestep, global_cond)
