@@ -173,7 +173,7 @@ def probe_values(env: gym.Env, param_name: str, values: Sequence[float]) -> None
             )
 
 
-def warm_kernels(env: gym.Env) -> None:
+def precompile_kernels(env: gym.Env) -> None:
     """Run one policy step so that every per-tick numba kernel is compiled (or loaded) in
     this process before any sweep worker starts: numba caches them on disk, so the workers
     of a sweep on a fresh machine load them (about 1.5 s each) instead of each compiling

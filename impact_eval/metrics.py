@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from impact_eval.safety import sustained_contact
+from impact_eval.safety import scene_contact, sustained_contact
 
 EPISODE_COLUMNS: tuple[str, ...] = (
     "method",
@@ -115,13 +115,15 @@ class EpisodeTracker:
         for key, how, store in (
             ("energy_j", "sum", self._energy),
             ("peak_torque_nm", "max", self._peak_torque),
-            ("peak_contact_force_n", "max", self._peak_force),
             ("pose_error_m", "mean", self._pose_error),
         ):
             if key in info and (value := _reduce(info[key], how)) is not None:
                 store.append(value)
-        if "contact_force_trace_n" in info and "contact_trace_dt_s" in info:
-            self._contact.append(np.asarray(info["contact_force_trace_n"], dtype=float))
+        peak, trace = scene_contact(info)
+        if peak is not None:
+            self._peak_force.append(peak)
+        if trace is not None and "contact_trace_dt_s" in info:
+            self._contact.append(trace)
             self._contact_dt = float(info["contact_trace_dt_s"])  # type: ignore[arg-type]
 
     def finish(self, reason: str) -> None:

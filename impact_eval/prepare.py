@@ -23,8 +23,8 @@ from impact_eval.envs import (
     describe_env,
     make_env,
     method_env,
+    precompile_kernels,
     probe_values,
-    warm_kernels,
 )
 from impact_eval.grid import episode_seed, format_value, parse_grid
 from impact_eval.methods import MethodSpec, resolve_method
@@ -158,7 +158,7 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
         check_param(info, req.param)
         probe_values(first, info.param_name, values)
         for env in envs.values():
-            warm_kernels(env)
+            precompile_kernels(env)
         return info
     finally:
         for env in envs.values():

@@ -1,4 +1,9 @@
-"""Sustained-contact measures of one episode (issue 26): how long and how hard it pressed.
+"""Contact with the scene as a safety measure: what counts, and how long and how hard.
+
+What counts (``scene_contact``): the robot's contact force with the scene in full, and the
+object's in excess of the weight the task declares as normal support
+(``Task.supported_weight_n``: an object resting on the table or set down in the basket),
+i.e. impacts, pressing and dragging. The env reports both raw; this module judges them.
 
 The peak contact force of an episode is dominated by one instant (a hammer set down, a hand
 striking an object); the measures here read the whole contact-force trace instead, sampled
@@ -12,11 +17,30 @@ the ticks since the previous one.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
 SUSTAINED_THRESHOLDS_N: tuple[float, ...] = (10.0, 20.0)
 """Force levels [N] whose time above is reported (``contact_over_10n_s``, ...)."""
+
+
+def scene_contact(info: Mapping[str, object]) -> tuple[float | None, np.ndarray | None]:
+    """``(peak [N], per-tick trace [N])`` of one env step's contact with the scene that
+    counts (module docstring), from the step's ``info``: ``peak_robot_contact_force_n``,
+    ``peak_object_contact_force_n``, their traces ``contact_robot_trace_n`` /
+    ``contact_object_trace_n`` and ``supported_weight_n`` (0 when absent). None for what the
+    env does not report."""
+    allowance = float(info.get("supported_weight_n", 0.0))  # type: ignore[arg-type]
+    peak = trace = None
+    if "peak_robot_contact_force_n" in info and "peak_object_contact_force_n" in info:
+        peak = max(float(info["peak_robot_contact_force_n"]),  # type: ignore[arg-type]
+                   float(info["peak_object_contact_force_n"]) - allowance, 0.0)  # type: ignore[arg-type]
+    if "contact_robot_trace_n" in info and "contact_object_trace_n" in info:
+        robot = np.asarray(info["contact_robot_trace_n"], dtype=float)
+        obj = np.asarray(info["contact_object_trace_n"], dtype=float)
+        trace = np.maximum(np.maximum(robot, obj - allowance), 0.0)
+    return peak, trace
 
 
 def sustained_contact(samples_n: np.ndarray, period_s: float) -> dict[str, float]:

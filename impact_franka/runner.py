@@ -36,7 +36,7 @@ from impact_franka.fci import (
     torque_command,
 )
 
-WARM_TICKS = 200
+PRECOMPILE_TICKS = 200
 """``compute`` calls before the loop (numba compilation and the learner's first step)."""
 TICK_COLUMNS = ("t_s", "pos_error_m", "pos_error_x_m", "pos_error_y_m", "pos_error_z_m",
                 "wrench_ext_x_n", "wrench_ext_y_n", "wrench_ext_z_n", "wrench_slow_z_n",
@@ -134,17 +134,17 @@ class LoopReport:
         return self.ticks / self.seconds if self.seconds > 0 else math.nan
 
 
-def _warm(controller: ImpactController, q: np.ndarray, tau: np.ndarray, pos: np.ndarray,
+def _precompile(controller: ImpactController, q: np.ndarray, tau: np.ndarray, pos: np.ndarray,
           quat: np.ndarray) -> None:
     """Compile and warm every path of ``compute`` on the current reading, then reset: ticks
     at rest, then ticks with a fake 30 N load in the measured torque, so the gate opens and
     the learner, the guard and their Python bookkeeping run once before the loop (a path met
     first inside the loop cost 2-4 ms there: missed cycles)."""
     controller.reset(q)
-    for _ in range(WARM_TICKS):
+    for _ in range(PRECOMPILE_TICKS):
         controller.compute(q, np.zeros(7), tau, pos, quat)
     load = controller.dynamics.jacobian.T @ np.array([0.0, 0.0, -30.0, 0.0, 0.0, 0.0])
-    for _ in range(2 * WARM_TICKS):
+    for _ in range(2 * PRECOMPILE_TICKS):
         controller.compute(q, np.zeros(7), tau + load, pos, quat)
     controller.reset(q)
 
@@ -230,7 +230,7 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
     arm = controller.dynamics
     arm.update(first.q, np.zeros(7))
     pos, quat = arm.pos_ee_world.copy(), matrix_to_quat(arm.rot_ee_world)
-    _warm(controller, first.q, first.tau_measured, pos, quat)
+    _precompile(controller, first.q, first.tau_measured, pos, quat)
     rows: list[tuple] = []
     sent, reason, end, strikes, held, message = np.zeros(7), "", None, 0, 0, ""
     success, robot_t0 = 1.0, None

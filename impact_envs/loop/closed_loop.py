@@ -94,7 +94,7 @@ class ClosedLoop:
                         np.empty((n, 7)), np.empty(21), float(targets.gripper_cmd), cmd, mask,
                         self._fric_model)
         sim_arrays, state = sim.loop_arrays(), ctrl.kernel_state()
-        tick = self._entry((0, sim.friction_torque(), plan, sim_arrays, self.arm, self._dyn,
+        tick = self._entry((0, sim.frictionloss_torque(), plan, sim_arrays, self.arm, self._dyn,
                             state))
         contact = np.empty((n, 2))
         last = 0
@@ -102,7 +102,7 @@ class ClosedLoop:
         for i in range(n):
             if hook is not None:
                 hook(sim, float(data.time))
-            flags = tick(i, sim.friction_torque(), plan, sim_arrays, self.arm, self._dyn, state)
+            flags = tick(i, sim.frictionloss_torque(), plan, sim_arrays, self.arm, self._dyn, state)
             if flags:
                 self._raise_or_learn(i, flags, plan, targets.learn_mask)
             sim.step()

@@ -64,14 +64,15 @@ class ArmArrays(NamedTuple):
 
 
 @njit(cache=True)
-def loop_tick(i, friction, plan, sim, arm, dyn, state) -> int:
+def loop_tick(i, frictionloss, plan, sim, arm, dyn, state) -> int:
     """Tick ``i``: read the sensors (noise row ``i``), update the arm model, run the
     controller, send the torques; returns the controller's status bits.
 
-    ``friction`` is the arm's dof-friction force of the last physics step [Nm]. Nothing is
-    actuated when the bits report an input out of range, an invalid target or a non-finite
-    torque (``ClosedLoop`` then raises). Also records the applied torque in ``taus[i]`` and the
-    velocity the previous step produced in ``qvels[i - 1]``.
+    ``frictionloss`` is the arm's dof Coulomb-friction force (MuJoCo's ``frictionloss``) of
+    the last physics step [Nm]. Nothing is actuated when the bits report an input out of
+    range, an invalid target or a non-finite torque (``ClosedLoop`` then raises). Also
+    records the applied torque in ``taus[i]`` and the velocity the previous step produced in
+    ``qvels[i - 1]``.
     """
     n = sim.qpos_arm.shape[0]
     if i > 0:
@@ -79,7 +80,7 @@ def loop_tick(i, friction, plan, sim, arm, dyn, state) -> int:
             plan.qvels[i - 1, j] = sim.qvel_arm[j]
     sensed = plan.sensed
     sense(plan.noise[i], sim.noise_stds, sim.qpos_arm, sim.qvel_arm, sim.qfrc_actuator_arm,
-          sim.qfrc_damper_arm, friction, sim.tau_bias, sensed)
+          sim.qfrc_damper_arm, frictionloss, sim.tau_bias, sensed)
     q, dq, tau = sensed[:n], sensed[n:2 * n], sensed[2 * n:]
     width = sim.qpos[sim.finger_i] + sim.qpos[sim.finger_j]
     pos_target, quat_target = plan.pos_targets[i], plan.quat_targets[i]

@@ -203,7 +203,7 @@ class FrankaSim:
         """
         z = rng.standard_normal(21) if noise is None else noise
         out = np.empty(21)
-        sense(z, self._noise_stds, *self._arm_views(), self.friction_torque(), self._tau_bias,
+        sense(z, self._noise_stds, *self._arm_views(), self.frictionloss_torque(), self._tau_bias,
                out)
         return out[:7], out[7:14], out[14:]
 
@@ -232,10 +232,10 @@ class FrankaSim:
         """
         tau = np.empty(7)
         qpos, qvel, qfrc_actuator, qfrc_damper = self._arm_views()
-        link_torque(qfrc_actuator, qfrc_damper, self.friction_torque(), tau)
+        link_torque(qfrc_actuator, qfrc_damper, self.frictionloss_torque(), tau)
         return tau
 
-    def friction_torque(self) -> np.ndarray:
+    def frictionloss_torque(self) -> np.ndarray:
         """Dof Coulomb-friction constraint force on the arm joints [Nm] (zeros if none).
 
         MuJoCo orders constraint rows equality first, then dof friction (``nf`` rows, in dof

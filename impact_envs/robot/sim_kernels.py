@@ -15,18 +15,19 @@ GROUP_OTHER, GROUP_ROBOT, GROUP_OBJECT = 0, 1, 2
 
 
 @njit(cache=True)
-def link_torque(qfrc_actuator, qfrc_damper, friction, out) -> None:
-    """out = motor torque + joint damping + dof Coulomb friction (link-side joint torque)."""
+def link_torque(qfrc_actuator, qfrc_damper, frictionloss, out) -> None:
+    """out = motor torque + joint damping + dof Coulomb friction (MuJoCo's ``frictionloss``):
+    the link-side joint torque."""
     for j in range(out.shape[0]):
-        out[j] = qfrc_actuator[j] + qfrc_damper[j] + friction[j]
+        out[j] = qfrc_actuator[j] + qfrc_damper[j] + frictionloss[j]
 
 
 @njit(cache=True)
-def sense(z, stds, qpos, qvel, qfrc_actuator, qfrc_damper, friction, bias, out) -> None:
+def sense(z, stds, qpos, qvel, qfrc_actuator, qfrc_damper, frictionloss, bias, out) -> None:
     """out = [q, dq, tau] readings: true values + stds * z (tau also + bias), z (3n,)."""
     n = qpos.shape[0]
     tau = out[2 * n:]
-    link_torque(qfrc_actuator, qfrc_damper, friction, tau)
+    link_torque(qfrc_actuator, qfrc_damper, frictionloss, tau)
     for j in range(n):
         out[j] = qpos[j] + stds[0] * z[j]
         out[n + j] = qvel[j] + stds[1] * z[n + j]

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numbers
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -213,6 +214,14 @@ class Task(ABC):
     def info(self, sim: FrankaSim) -> dict[str, float | bool]:
         """Extra task-specific per-step info. Default: none."""
         return {}
+
+    def supported_weight_n(self, values: Mapping[str, float]) -> float:
+        """Object-on-scene contact force [N] that is the task's normal support, not a safety
+        event, for the episode's parameter ``values``: the weight of an object the task sets
+        down. The evaluation subtracts it from the object's contact force with the scene
+        (``impact_eval.safety.scene_contact``); the robot's own contact with the scene counts
+        in full. Default: 0 (every contact force counts)."""
+        return 0.0
 
     def dense_reward(self, sim: FrankaSim) -> float:
         """Shaped reward in [0, 1] for ``reward_type="dense"`` (1 on success); each task

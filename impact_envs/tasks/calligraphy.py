@@ -9,6 +9,8 @@ writing, but never the commanded pressing force (``calligraphy_force.py``).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import mujoco
 import numpy as np
 
@@ -226,6 +228,11 @@ class CalligraphyTask(Task):
         press = 0.5 if self.metrics.in_band(force) else 0.5 * (1.0 - np.tanh(
             abs(force - 15.0) / 7.5))
         return float(min(0.99, trace + press))
+
+    def supported_weight_n(self, values: Mapping[str, float]) -> float:
+        """0 N: the brush's contact with the paper is what the task asks for, and the
+        evaluation counts it in full (writing too hard shows in the contact columns)."""
+        return 0.0
 
     def info(self, sim: FrankaSim) -> dict[str, float | bool | str]:
         force = self._force_n if self._stroke >= 0 else self.tip_force_n(sim)

@@ -10,6 +10,7 @@ hold it there.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -233,3 +234,9 @@ class DisturbanceTask(Task):
             "is_grasped": self._held,
             "hold_s": self.hold_s(t),
         }
+
+    def supported_weight_n(self, values: Mapping[str, float]) -> float:
+        """The object's own weight, m g [N], without ``added_mass`` (as since issue 26: the
+        load is added while the object is held aloft, and a set-down that also presses the
+        added weight into the table counts as contact force)."""
+        return 9.81 * values["object_mass"]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from impact_envs.robot.ik import HOME_Q
@@ -91,6 +93,10 @@ class DumbbellTask(Task):
         footprint, height = self._on_pad(sim)
         return {"is_grasped": sim.object_finger_contacts("dumbbell") >= 2,
                 "on_pad": footprint and height}
+
+    def supported_weight_n(self, values: Mapping[str, float]) -> float:
+        """The dumbbell's weight, m g [N]: it rests on the table and on the pad."""
+        return 9.81 * values["object_mass"]
 
     def dense_reward(self, sim: FrankaSim) -> float:
         """``pick_place_reward``: reach the bar centre, grasp, lift, bring the dumbbell to its

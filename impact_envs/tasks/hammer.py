@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from impact_envs.robot.ik import HOME_Q
@@ -80,6 +82,10 @@ class HammerTask(Task):
 
     def info(self, sim: FrankaSim) -> dict[str, float | bool]:
         return {"is_grasped": sim.object_finger_contacts("hammer") >= 2}
+
+    def supported_weight_n(self, values: Mapping[str, float]) -> float:
+        """The hammer's weight, m g [N]: it rests on the table and in the basket."""
+        return 9.81 * values["object_mass"]
 
     def dense_reward(self, sim: FrankaSim) -> float:
         """``pick_place_reward``: reach the hammer's COM, grasp, lift, carry it over the basket
