@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_envs.rates import POLICY_HZ
 
 
 @dataclass(frozen=True)
@@ -28,7 +29,7 @@ class VideoOptions:
         gop_frames: Frames between keyframes [frames].
     """
 
-    fps: int = 30
+    fps: int = POLICY_HZ
     crf: int = 18
     gop_frames: int = 2
 

@@ -12,11 +12,11 @@ from impact_envs.control.config import ControllerConfig, InternalModelConfig
 from impact_envs.control.internal_model import InternalModel
 from impact_envs.control.internal_model.learner import (
     DIVERGED,
-    PENDING,
     continue_step,
     replay_store,
     splitmix64_below,
     start_step,
+    unpack_counters,
 )
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.robot.ik import HOME_Q
@@ -43,7 +43,7 @@ def _step(model: InternalModel, x: np.ndarray, y: np.ndarray, m: np.ndarray) -> 
     _, weights, biases, _, lrn = model.kernel_args()
     start_step(x, y, m, lrn)
     ticks = 0
-    while lrn.scal[PENDING]:
+    while unpack_counters(lrn.scal)[0].pending[0]:
         assert continue_step(weights, biases, lrn) == 0
         ticks += 1
     return ticks
@@ -94,7 +94,8 @@ def test_sampler_is_seeded_uniform_and_restarts_with_the_model() -> None:
                np.ones(6, np.float32), model.learner)
     assert int(model.learner.rng[0]) != first
     model.reset_history()  # drops the pending step and reseeds
-    assert int(model.learner.rng[0]) == first and model.learner.scal[PENDING] == 0
+    assert int(model.learner.rng[0]) == first
+    assert unpack_counters(model.learner.scal)[0].pending[0] == 0
 
 
 def test_a_diverging_in_kernel_step_is_reported() -> None:

@@ -27,15 +27,63 @@ from impact_envs.control.internal_model.kernels import (
     dense,
     tanh_inplace,
 )
-from impact_envs.control.kernel_layout import STORE, TRAIN
+from impact_envs.control.kernel_layout import LAYOUT_PROBE, STORE, TRAIN, _next
 
 DIVERGED = 32
 """Status bit: the SGD step just applied left a non-finite loss or weight (Python then
 re-initialises the model, ``InternalModel.n_divergences``)."""
 
-# Slots of ``LearnerArrays.scal``.
-COUNT, HEAD, PENDING, NEXT_ROW, N_UPDATES, LOSS, LR, BATCH, PER_TICK, IN_KERNEL = range(10)
-SCAL_SIZE = 10
+
+
+class LearnerCounters(NamedTuple):
+    """The learner's scalars, as named (1,) float64 views of ``LearnerArrays.scal``
+    (``unpack_counters``, the one definition of that buffer's layout).
+
+    Attributes:
+        count: Samples in the replay ring.
+        head: Ring slot the next sample goes to.
+        pending: Samples in the SGD step in progress (0: none).
+        next_row: Next batch row to process.
+        n_updates: SGD steps applied.
+        loss: Sum of squared masked errors of the step in progress.
+        learning_rate: SGD learning rate.
+        batch_size: Rows of an SGD step (the current sample and replayed ones).
+        samples_per_tick: Rows processed per tick.
+        in_kernel: 1 when the learner runs in the kernel, 0 when in Python (``"numpy"``).
+    """
+
+    count: np.ndarray
+    head: np.ndarray
+    pending: np.ndarray
+    next_row: np.ndarray
+    n_updates: np.ndarray
+    loss: np.ndarray
+    learning_rate: np.ndarray
+    batch_size: np.ndarray
+    samples_per_tick: np.ndarray
+    in_kernel: np.ndarray
+
+
+@njit(cache=True, inline="always")
+def unpack_counters(scal):
+    """(``LearnerCounters`` as named views of ``scal``, the layout's length)."""
+    count, o = _next(scal, 0, 1)
+    head, o = _next(scal, o, 1)
+    pending, o = _next(scal, o, 1)
+    next_row, o = _next(scal, o, 1)
+    n_updates, o = _next(scal, o, 1)
+    loss, o = _next(scal, o, 1)
+    learning_rate, o = _next(scal, o, 1)
+    batch_size, o = _next(scal, o, 1)
+    samples_per_tick, o = _next(scal, o, 1)
+    in_kernel, o = _next(scal, o, 1)
+    return LearnerCounters(count, head, pending, next_row, n_updates, loss, learning_rate,
+                           batch_size, samples_per_tick, in_kernel), o
+
+
+def make_counters() -> np.ndarray:
+    """A zeroed ``scal`` buffer, sized by ``unpack_counters``."""
+    return np.zeros(int(unpack_counters(np.zeros(LAYOUT_PROBE))[1]))
 
 
 class LearnerArrays(NamedTuple):
@@ -48,7 +96,7 @@ class LearnerArrays(NamedTuple):
     ``target`` (6,) float32 scratch (this tick's normalized target); ``scal`` float64
     [count, head, samples in the pending step (0: none), next row, SGD steps taken, loss
     sum, learning rate, batch size, samples per tick, learner in the kernel (1) or in
-    Python (0)]; ``rng`` (1,) uint64 splitmix64 state.
+    Python (0)], named by ``unpack_counters``; ``rng`` (1,) uint64 splitmix64 state.
     """
 
     inputs: np.ndarray
@@ -70,9 +118,10 @@ def make_learner(capacity: int, batch_size: int, input_dim: int, weights: tuple,
                  learning_rate: float, samples_per_tick: int, in_kernel: bool) -> LearnerArrays:
     """Zeroed learner arrays for a network with ``weights`` (float32 (out, in) matrices)."""
     widest = max(w.shape[0] for w in weights)
-    scal = np.zeros(SCAL_SIZE)
-    scal[LR], scal[BATCH], scal[PER_TICK] = learning_rate, batch_size, samples_per_tick
-    scal[IN_KERNEL] = float(in_kernel)
+    scal = make_counters()
+    c = unpack_counters(scal)[0]
+    c.learning_rate[0], c.batch_size[0] = learning_rate, batch_size
+    c.samples_per_tick[0], c.in_kernel[0] = samples_per_tick, float(in_kernel)
     f32 = np.float32
     return LearnerArrays(
         np.zeros((capacity, input_dim), f32), np.zeros((capacity, 6), f32),
@@ -98,20 +147,22 @@ def splitmix64_below(rng, n) -> int:
 @njit(cache=True)
 def replay_store(x, target, mask, lrn) -> None:
     """Copy one sample into the ring at ``head`` (the oldest is overwritten when full)."""
+    c = unpack_counters(lrn.scal)[0]
     cap = lrn.inputs.shape[0]
-    h = int(lrn.scal[HEAD])
+    h = int(c.head[0])
     lrn.inputs[h, :] = x
     lrn.targets[h, :] = target
     lrn.masks[h, :] = mask
-    lrn.scal[HEAD] = (h + 1) % cap
-    lrn.scal[COUNT] = min(lrn.scal[COUNT] + 1.0, cap)
+    c.head[0] = (h + 1) % cap
+    c.count[0] = min(c.count[0] + 1.0, cap)
 
 
 @njit(cache=True)
 def start_step(x, target, mask, lrn) -> None:
     """Begin an SGD step: row 0 = the current sample, then replayed rows; zero the gradient."""
-    count = int(lrn.scal[COUNT])
-    n = 1 + (int(lrn.scal[BATCH]) - 1 if count > 0 else 0)
+    c = unpack_counters(lrn.scal)[0]
+    count = int(c.count[0])
+    n = 1 + (int(c.batch_size[0]) - 1 if count > 0 else 0)
     lrn.batch_x[0, :] = x
     lrn.batch_y[0, :] = target
     lrn.batch_m[0, :] = mask
@@ -123,7 +174,7 @@ def start_step(x, target, mask, lrn) -> None:
     for k in range(len(lrn.grad_w)):
         lrn.grad_w[k][:] = 0.0
         lrn.grad_b[k][:] = 0.0
-    lrn.scal[PENDING], lrn.scal[NEXT_ROW], lrn.scal[LOSS] = n, 0.0, 0.0
+    c.pending[0], c.next_row[0], c.loss[0] = n, 0.0, 0.0
 
 
 @njit(cache=True, fastmath={"reassoc", "contract"})
@@ -150,11 +201,12 @@ def accumulate_sample(r, weights, biases, lrn) -> None:
         if k < n_layers - 1:
             tanh_inplace(out)  # the forward pass's own tanh
     y, m = lrn.batch_y[r], lrn.batch_m[r]
-    scale = np.float32(2.0 / (lrn.scal[PENDING] * 6.0))
+    c = unpack_counters(lrn.scal)[0]
+    scale = np.float32(2.0 / (c.pending[0] * 6.0))
     g = lrn.grad_out[0]
     for i in range(6):
         err = (acts[n_layers - 1, i] - np.float64(y[i])) * np.float64(m[i])
-        lrn.scal[LOSS] += err * err
+        c.loss[0] += err * err
         g[i] = err * np.float64(m[i]) * np.float64(scale)
     src = 0
     for k in range(n_layers - 1, -1, -1):
@@ -179,8 +231,9 @@ def accumulate_sample(r, weights, biases, lrn) -> None:
 @njit(cache=True)
 def _apply(weights, biases, lrn) -> int:
     """W -= lr * grad for every layer; DIVERGED when the loss or a weight is not finite."""
-    lr = np.float32(lrn.scal[LR])
-    finite = math.isfinite(lrn.scal[LOSS])
+    c = unpack_counters(lrn.scal)[0]
+    lr = np.float32(c.learning_rate[0])
+    finite = math.isfinite(c.loss[0])
     for k in range(len(weights)):
         w, b, gw, gb = weights[k], biases[k], lrn.grad_w[k], lrn.grad_b[k]
         for i in range(w.shape[0]):
@@ -193,22 +246,23 @@ def _apply(weights, biases, lrn) -> int:
                 if not math.isfinite(row[j]):
                     finite = False
                     break
-    lrn.scal[PENDING] = 0.0
-    lrn.scal[N_UPDATES] += 1.0
+    c.pending[0] = 0.0
+    c.n_updates[0] += 1.0
     return 0 if finite else DIVERGED
 
 
 @njit(cache=True)
 def continue_step(weights, biases, lrn) -> int:
     """Process this tick's share of the pending step; apply it after its last sample."""
-    n = int(lrn.scal[PENDING])
+    c = unpack_counters(lrn.scal)[0]
+    n = int(c.pending[0])
     if n == 0:
         return 0
-    r0 = int(lrn.scal[NEXT_ROW])
-    r1 = min(n, r0 + int(lrn.scal[PER_TICK]))
+    r0 = int(c.next_row[0])
+    r1 = min(n, r0 + int(c.samples_per_tick[0]))
     for r in range(r0, r1):
         accumulate_sample(r, weights, biases, lrn)
-    lrn.scal[NEXT_ROW] = r1
+    c.next_row[0] = r1
     return _apply(weights, biases, lrn) if r1 == n else 0
 
 
@@ -219,7 +273,8 @@ def learner_tick(flags, wrench_slow, mask, m32, m, weights, biases, lrn) -> int:
     Returns ``flags`` without STORE / TRAIN (done here), plus DIVERGED when a step applied on
     this tick diverged. A no-op returning ``flags`` unchanged when the learner runs in Python.
     """
-    if lrn.scal[IN_KERNEL] == 0.0:
+    c = unpack_counters(lrn.scal)[0]
+    if c.in_kernel[0] == 0.0:
         return flags
     if flags & (STORE | TRAIN):
         out_scale = m.out_scale
@@ -233,6 +288,6 @@ def learner_tick(flags, wrench_slow, mask, m32, m, weights, biases, lrn) -> int:
             target[i] = np.float32(wrench_slow[i] * inv_scale)
         if flags & STORE:
             replay_store(x, target, mask, lrn)
-        if flags & TRAIN and lrn.scal[PENDING] == 0.0:
+        if flags & TRAIN and c.pending[0] == 0.0:
             start_step(x, target, mask, lrn)
     return (flags & ~(STORE | TRAIN)) | continue_step(weights, biases, lrn)

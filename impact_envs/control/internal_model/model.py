@@ -27,10 +27,9 @@ from impact_envs.control.internal_model import kernels
 from impact_envs.control.internal_model.config import InternalModelConfig
 from impact_envs.control.internal_model.gate import SurpriseGate
 from impact_envs.control.internal_model.learner import (
-    N_UPDATES,
-    PENDING,
     LearnerArrays,
     make_learner,
+    unpack_counters,
 )
 from impact_envs.control.internal_model.net import (
     FEATURE_DIM,
@@ -140,15 +139,15 @@ class InternalModel:
     @property
     def n_updates(self) -> int:
         """SGD steps taken since construction / ``reinitialize``."""
-        return int(self.learner.scal[N_UPDATES])
+        return int(unpack_counters(self.learner.scal)[0].n_updates[0])
 
     @n_updates.setter
     def n_updates(self, value: int) -> None:
-        self.learner.scal[N_UPDATES] = value
+        unpack_counters(self.learner.scal)[0].n_updates[0] = value
 
     def _reseed_learner(self) -> None:
         """Drop a pending in-kernel SGD step and reseed its replay sampler."""
-        self.learner.scal[PENDING] = 0.0
+        unpack_counters(self.learner.scal)[0].pending[0] = 0.0
         self.learner.rng[0] = np.uint64(self.config.seed)
 
     @property

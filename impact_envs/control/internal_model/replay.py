@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.control.internal_model.learner import COUNT, HEAD, SCAL_SIZE
+from impact_envs.control.internal_model.learner import make_counters, unpack_counters
 
 
 class ReplayBuffer:
@@ -29,8 +29,9 @@ class ReplayBuffer:
         if storage is None:
             storage = (np.zeros((capacity, input_dim), dtype=np.float32),
                        np.zeros((capacity, output_dim), dtype=np.float32),
-                       np.zeros((capacity, output_dim), dtype=np.float32), np.zeros(SCAL_SIZE))
+                       np.zeros((capacity, output_dim), dtype=np.float32), make_counters())
         self.inputs, self.targets, self.masks, self._scal = storage
+        self._counters = unpack_counters(self._scal)[0]
         self._seed = seed
         self._rng = np.random.default_rng(seed)
 
@@ -46,19 +47,19 @@ class ReplayBuffer:
     @property
     def count(self) -> int:
         """Number of valid samples."""
-        return int(self._scal[COUNT])
+        return int(self._counters.count[0])
 
     @count.setter
     def count(self, value: int) -> None:
-        self._scal[COUNT] = value
+        self._counters.count[0] = value
 
     @property
     def _head(self) -> int:
-        return int(self._scal[HEAD])
+        return int(self._counters.head[0])
 
     @_head.setter
     def _head(self, value: int) -> None:
-        self._scal[HEAD] = value
+        self._counters.head[0] = value
 
     def clear(self) -> None:
         """Drop all samples and reseed the sampler."""
