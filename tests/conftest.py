@@ -1,15 +1,22 @@
-"""Shared pytest configuration: the ``slow`` marker runs only with ``--runslow``."""
+"""Shared pytest configuration: the ``slow`` marker runs only with ``--runslow``; tests/ on
+``sys.path`` so the test folders (which mirror the packages) import the shared helpers as
+``fixtures.<module>`` (tests/fixtures/)."""
 
 from __future__ import annotations
 
 import logging
 import os
+import sys
 from pathlib import Path
 
 import pytest
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+TESTS = Path(__file__).resolve().parent
+if str(TESTS) not in sys.path:
+    sys.path.insert(0, str(TESTS))
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -25,13 +32,10 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             item.add_marker(skip_slow)
 
 
-TESTS = Path(__file__).resolve().parent
-
-
 @pytest.fixture(scope="session")
 def ray_local(tmp_path_factory: pytest.TempPathFactory):
     """A 2-CPU Ray instance in this process (skipped without the ``[ray]`` extra). Its workers
-    import this directory's modules (the fake env) and see a crash switch directory."""
+    import the ``fixtures`` modules (the fake envs) and see a crash switch directory."""
     ray = pytest.importorskip("ray")
     crash_dir = tmp_path_factory.mktemp("ray_crash")
     env = {"PYTHONPATH": os.pathsep.join([str(TESTS), str(TESTS.parent)]),

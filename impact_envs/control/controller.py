@@ -109,7 +109,7 @@ class ImpactController:
     STATELESS: tuple[str, ...] = ("_zeros6", "_zeros7")
     """Array attributes that carry nothing from one tick to the next (constants). Every
     other array of the controller and of its stages must be part of ``kernel_state()``
-    (tests/test_env_state.py checks it), so snapshots stay complete as stages are added."""
+    (tests/envs/test_env_state.py checks it), so snapshots stay complete as stages are added."""
 
     def __init__(
         self,

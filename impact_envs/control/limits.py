@@ -4,10 +4,10 @@ libfranka (``rate_limiting.h``, ``command_saturation.cpp``) limits the torque ra
 command without gravity as ``last + clamp((cmd - last) / kDeltaT, -max, max) * kDeltaT`` with
 ``kDeltaT = 1e-3`` s and ``kMaxTorqueRate = 1000 - kLimitEps = 999.999`` Nm/s; the robot's own
 ``controller_torque_discontinuity`` reflex trips at 1000 Nm/s. ``rate_limiter="libfranka"``
-reproduces that operation for operation (bit for bit, tests/test_limits.py) and is the default
-since 2026-11-26; ``"per_tick_clip"`` (``last + clip(cmd - last, +-rate * dt)``, at 1000 Nm/s)
-is the limiter the tables before that date were computed with, and the one for a controller
-period other than 1 ms. docs/controller.md, "Limits on the torque interface".
+reproduces that operation for operation (bit for bit, tests/control/test_limits.py) and is the
+default since 2026-11-26; ``"per_tick_clip"`` (``last + clip(cmd - last, +-rate * dt)``, at
+1000 Nm/s) is the limiter the tables before that date were computed with, and the one for a
+controller period other than 1 ms. docs/controller.md, "Limits on the torque interface".
 """
 
 from __future__ import annotations

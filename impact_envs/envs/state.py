@@ -4,7 +4,7 @@
 ``restore(env, state)`` writes it back *into the env's own arrays*, so every view the loop,
 the controller and the simulator hold stays valid (a plain ``copy.deepcopy`` of an env broke
 them: the copy ran but no longer actuated). Restoring a captured state and replaying the
-same actions reproduces the trajectory bit for bit (tests/test_env_state.py).
+same actions reproduces the trajectory bit for bit (tests/envs/test_env_state.py).
 """
 
 from __future__ import annotations

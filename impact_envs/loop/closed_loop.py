@@ -3,7 +3,7 @@
 One path for every task: ``ClosedLoop.run`` runs the ticks of one policy step, each one numba
 call (``tick.loop_tick``) followed by ``mj_step``; a task that declares a per-tick hook
 (``Task.has_tick_hook``) gets it called before each tick. ``control_tick`` is the same tick
-through the controller's public ``compute`` (what a real FR3 would run); tests/test_loop.py
+through the controller's public ``compute`` (what a real FR3 would run); tests/loop/test_loop.py
 checks that both give identical trajectories.
 """
 

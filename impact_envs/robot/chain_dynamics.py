@@ -6,7 +6,7 @@ quantities (TCP pose, world-aligned TCP Jacobian, M(q) with armature, g(q), and 
 matrix with M' = C + C^T) in about 3 us, and the closed loop (``impact_envs/loop``) runs it
 inside its one call per tick. The parameters are read once from a (possibly perturbed) ``pin.Model``
 (``ChainParams.from_pinocchio``), so Pinocchio stays the single source of the controller's
-model; tests/test_chain_dynamics.py checks every output against Pinocchio.
+model; tests/robot/test_chain_dynamics.py checks every output against Pinocchio.
 
 Algorithm (world frame, per link i with COM c_i, world inertia I_i = R_i I_i^body R_i^T):
     J_v,i[:, j] = z_j x (c_i - o_j),  J_w,i[:, j] = z_j          (j <= i)

@@ -29,7 +29,7 @@ def register_task(task_cls: type[Task]) -> str:
             max_episode_steps=task_cls.max_episode_steps,
             # Gymnasium's passive checker latches its "reset was called" flag even when the
             # first reset is refused (bad options), after which every step raises TypeError
-            # inside the checker; the envs validate their own inputs and tests/test_envs.py
+            # inside the checker; the envs validate their own inputs and tests/envs/test_envs.py
             # runs the full checker, so gym.make adds no passive checker (docs/envs.md).
             disable_env_checker=True,
             kwargs={"task": f"{task_cls.__module__}:{task_cls.__qualname__}"} if generic else {},

@@ -6,7 +6,7 @@ cost that no thread pool can stall. One SGD step (batch ``batch_size``: the curr
 replayed ones, drawn when the step starts) is spread over ticks, ``samples_per_tick`` samples
 per tick, against the weights of the tick it started on; the update is applied on the tick
 that processes the last sample. The result is the whole-batch step of ``net.sgd_step`` (masked
-MSE, plain SGD), computed sample by sample (tests/test_learner.py: equal to autograd within
+MSE, plain SGD), computed sample by sample (tests/control/test_learner.py: equal to autograd within
 float32 round-off), and applied ``ceil(batch_size / samples_per_tick) - 1`` ticks later.
 
 Replay indices come from splitmix64 (seeded with ``InternalModelConfig.seed``, reseeded by

@@ -1,0 +1,126 @@
+"""Wilson intervals, episode metrics and the lockstep rollout (with the fake env)."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from fixtures.eval_fake import BARE_ID, FakePolicy
+
+from impact_eval.metrics import EpisodeTracker, wilson_interval
+from impact_eval.rollout import EpisodeJob, LockstepBatch
+
+
+@pytest.mark.parametrize(
+    ("k", "n", "low", "high"),
+    [  # reference values: statsmodels proportion_confint(k, n, method="wilson")
+        (0, 10, 0.0, 0.2775327998628892),
+        (5, 10, 0.2365930905493394, 0.7634069094506606),
+        (10, 10, 0.7224672001371108, 1.0),
+        (1, 20, 0.008881, 0.2361311),
+    ],
+)
+def test_wilson_interval_known_values(k: int, n: int, low: float, high: float) -> None:
+    got = wilson_interval(k, n)
+    assert got == pytest.approx((low, high), abs=1e-6)
+
+
+@pytest.mark.parametrize(("k", "n"), [(0, 7), (3, 20), (81, 263), (50, 50)])
+def test_wilson_bounds_invert_the_score_test(k: int, n: int) -> None:
+    z2 = 1.959963984540054**2
+    for p in wilson_interval(k, n):
+        assert (k / n - p) ** 2 == pytest.approx(z2 * p * (1 - p) / n, abs=1e-12)
+    assert wilson_interval(0, n)[1] == pytest.approx(z2 / (n + z2))
+
+
+def test_wilson_interval_edge_cases() -> None:
+    assert all(math.isnan(v) for v in wilson_interval(0, 0))
+    with pytest.raises(ValueError):
+        wilson_interval(3, 2)
+
+
+def test_tracker_missing_info_keys_give_nan() -> None:
+    tracker = EpisodeTracker(policy_dt=0.5)
+    tracker.update({})
+    tracker.update({"is_success": True, "energy_j": 2.0, "peak_torque_nm": [1.0, 7.0]})
+    tracker.update({"is_success": False, "energy_j": 3.0, "peak_torque_nm": 4.0})
+    tracker.finish("timeout")
+    row = tracker.row()
+    assert row["success"] == 0 and row["success_once"] == 1
+    assert row["length"] == 3 and row["time_to_success_s"] == 1.0
+    assert row["energy_j"] == 5.0 and row["peak_torque_nm"] == 7.0
+    assert math.isnan(row["peak_contact_force_n"]) and math.isnan(row["mean_pose_error_m"])
+    assert row["failure_reason"] == "timeout"
+
+
+def test_tracker_sustained_contact_columns_from_the_per_tick_trace() -> None:
+    """Two steps of 4 ticks at 1 ms: 3 ticks above 10 N, 2 above 20 N; p95 of the 8 ticks."""
+    tracker = EpisodeTracker(policy_dt=0.004)
+    for trace in ([0.0, 12.0, 25.0, 5.0], [30.0, 1.0, 0.0, 0.0]):
+        tracker.update({"contact_force_trace_n": np.array(trace), "contact_trace_dt_s": 1e-3})
+    tracker.finish("timeout")
+    row = tracker.row()
+    assert row["contact_over_10n_s"] == pytest.approx(3e-3)
+    assert row["contact_over_20n_s"] == pytest.approx(2e-3)
+    assert row["contact_p95_n"] == pytest.approx(
+        np.percentile([0, 12, 25, 5, 30, 1, 0, 0], 95))
+
+
+def test_env_contact_trace_is_per_tick_and_peaks_at_the_peak() -> None:
+    from impact_envs.policies.experts import make_expert
+    from impact_envs.policies.interface import stack_obs
+
+    env, expert = gym.make("IMPACT/Hammer-v0"), make_expert("IMPACT/Hammer-v0")
+    obs, _ = env.reset(seed=3)
+    expert.reset(1)
+    peaks = []
+    for _ in range(150):  # the expert grasps the hammer and strikes the nail
+        obs, _, _, _, info = env.step(expert.act(stack_obs([obs]))[0])
+        trace = info["contact_force_trace_n"]
+        assert trace.shape in ((33,), (34,)) and info["contact_trace_dt_s"] == 1e-3
+        assert trace.min() >= 0.0 and trace.max() == info["peak_contact_force_n"]
+        peaks.append(trace.max())
+    assert max(peaks) > 10.0  # a real contact
+    env.close()
+
+
+def test_tracker_success_and_crash() -> None:
+    ok = EpisodeTracker(policy_dt=0.1)
+    ok.update({"is_success": True, "pose_error_m": 0.2})
+    ok.finish("terminated")
+    assert ok.row()["failure_reason"] == "" and ok.row()["success"] == 1
+    crashed = EpisodeTracker(policy_dt=0.1)
+    crashed.update({"is_success": True})
+    crashed.finish("unstable: NaN\nin qacc")
+    assert crashed.row()["success"] == 0 and crashed.row()["success_once"] == 1
+    assert crashed.row()["failure_reason"] == "unstable: NaN in qacc"
+
+
+def _run_batch(masses: list[float]) -> dict[int, dict[str, object]]:
+    envs = [gym.make(BARE_ID, controller="impedance") for _ in masses]
+    rows: dict[int, dict[str, object]] = {}
+    jobs = [EpisodeJob(m, 100 + i, i) for i, m in enumerate(masses)]
+    LockstepBatch(envs, FakePolicy(0.9), "object_mass", 1 / 30).run(
+        jobs, lambda i, row: rows.__setitem__(i, row)
+    )
+    return rows
+
+
+def test_lockstep_batch_records_crashes_and_goes_on() -> None:
+    rows = _run_batch([0.5, 66.0, 77.0, 88.0, 1.0])
+    assert sorted(rows) == [0, 1, 2, 3, 4]
+    assert rows[1]["failure_reason"] == "unstable: qacc diverged at t=0.1 s"
+    assert rows[2]["failure_reason"] == "exception: RuntimeError"
+    assert rows[3]["failure_reason"] == "unstable: non-finite observation"
+    assert rows[1]["length"] == 2 and rows[3]["length"] == 3
+    for i in (0, 4):
+        assert rows[i]["length"] > 3
+        assert rows[i]["failure_reason"] in ("", "timeout")
+
+
+def test_lockstep_batch_is_reproducible() -> None:
+    first, second = _run_batch([0.5, 2.0, 4.0]), _run_batch([0.5, 2.0, 4.0])
+    assert first == second
+    assert np.isfinite([r["energy_j"] for r in first.values()]).all()

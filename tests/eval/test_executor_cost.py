@@ -1,0 +1,39 @@
+"""``impact_eval.experiments.executor_cost``: the task schedule behind docs/scale.md's estimate."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from impact_eval.experiments.executor_cost import main, schedule_wall
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def test_schedule_hands_each_task_to_the_first_free_cpu():
+    assert schedule_wall([4.0, 1.0, 1.0, 1.0], 2) == 4.0
+    assert schedule_wall([1.0, 1.0, 1.0, 4.0], 2) == 5.0  # 1 | 1, then 1 | 1 + 4
+    assert schedule_wall([2.0] * 10, 100) == 2.0
+
+
+def test_estimate_reproduces_the_documented_hammer_numbers(capsys):
+    csv = REPO / "results" / "hammer_presets" / "episodes.csv"
+    main(["--estimate", str(csv), "--methods", "vanilla_dp,augmented_dp,impact,impact_paper",
+          "--cpus", "160"])
+    out = capsys.readouterr().out
+    assert '"tasks": 84' in out and '"cpu_s": 2531.29' in out and '"wall_s": 51.59' in out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--estimate", "nowhere.csv"], "is not a file"),
+    (["--estimate", "README.md", "--step-ms", "impact=fast"], "--step-ms must be"),
+    (["--estimate", "README.md", "--cpus", "0"], "must be >= 1"),
+    (["--repeats", "0", "--out", "x"], "--repeats must be >= 1"),
+    ([], "give --out"),
+])
+def test_bad_input_is_one_line(argv, message, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1 and message in err
