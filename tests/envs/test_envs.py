@@ -56,7 +56,8 @@ def test_observations_finite_and_in_space(env_id):
         assert all(np.isfinite(v).all() for v in obs.values())
         assert isinstance(reward, float) and isinstance(terminated, bool)
     for key in ("is_success", "object_mass", "pose_error_m", "energy_j", "peak_torque_nm",
-                "peak_contact_force_n", "wrench_ext_world", "wrench_pred_world", "gate_open"):
+                "peak_robot_contact_force_n", "peak_object_contact_force_n",
+                "supported_weight_n", "wrench_ext_world", "wrench_pred_world", "gate_open"):
         assert key in info
     env.close()
 

@@ -11,6 +11,7 @@ from fixtures.eval_fake import BARE_ID, FakePolicy
 
 from impact_eval.metrics import EpisodeTracker, wilson_interval
 from impact_eval.rollout import EpisodeJob, LockstepBatch
+from impact_eval.safety import scene_contact
 
 
 @pytest.mark.parametrize(
@@ -59,13 +60,38 @@ def test_tracker_sustained_contact_columns_from_the_per_tick_trace() -> None:
     """Two steps of 4 ticks at 1 ms: 3 ticks above 10 N, 2 above 20 N; p95 of the 8 ticks."""
     tracker = EpisodeTracker(policy_dt=0.004)
     for trace in ([0.0, 12.0, 25.0, 5.0], [30.0, 1.0, 0.0, 0.0]):
-        tracker.update({"contact_force_trace_n": np.array(trace), "contact_trace_dt_s": 1e-3})
+        tracker.update({"contact_robot_trace_n": np.array(trace),
+                        "contact_object_trace_n": np.zeros(4), "contact_trace_dt_s": 1e-3})
     tracker.finish("timeout")
     row = tracker.row()
     assert row["contact_over_10n_s"] == pytest.approx(3e-3)
     assert row["contact_over_20n_s"] == pytest.approx(2e-3)
     assert row["contact_p95_n"] == pytest.approx(
         np.percentile([0, 12, 25, 5, 30, 1, 0, 0], 95))
+
+
+def test_scene_contact_counts_the_object_beyond_its_declared_support() -> None:
+    """The robot's contact counts in full, the object's beyond ``supported_weight_n``."""
+    info = {"peak_robot_contact_force_n": 3.0, "peak_object_contact_force_n": 30.0,
+            "contact_robot_trace_n": np.array([3.0, 0.0]),
+            "contact_object_trace_n": np.array([19.6, 30.0]), "supported_weight_n": 19.6}
+    peak, trace = scene_contact(info)
+    assert peak == pytest.approx(10.4) and trace == pytest.approx([3.0, 10.4])
+    assert scene_contact({**info, "supported_weight_n": 40.0})[0] == 3.0
+    assert scene_contact({}) == (None, None)
+
+
+@pytest.mark.parametrize("env_id", ["IMPACT/Hammer-v0", "IMPACT/Dumbbell-v0",
+                                    "IMPACT/Calligraphy-v0", "IMPACT/Disturbance-v0"])
+def test_each_task_declares_its_supported_weight(env_id) -> None:
+    env = gym.make(env_id)
+    _, info = env.reset(seed=0)
+    task = env.unwrapped.task
+    mass = info.get("object_mass")
+    expected = 0.0 if env_id == "IMPACT/Calligraphy-v0" else 9.81 * mass
+    assert info["supported_weight_n"] == task.supported_weight_n(env.unwrapped._episode_params)
+    assert info["supported_weight_n"] == pytest.approx(expected)
+    env.close()
 
 
 def test_env_contact_trace_is_per_tick_and_peaks_at_the_peak() -> None:
@@ -78,9 +104,9 @@ def test_env_contact_trace_is_per_tick_and_peaks_at_the_peak() -> None:
     peaks = []
     for _ in range(150):  # the expert grasps the hammer and strikes the nail
         obs, _, _, _, info = env.step(expert.act(stack_obs([obs]))[0])
-        trace = info["contact_force_trace_n"]
+        peak, trace = scene_contact(info)
         assert trace.shape in ((33,), (34,)) and info["contact_trace_dt_s"] == 1e-3
-        assert trace.min() >= 0.0 and trace.max() == info["peak_contact_force_n"]
+        assert trace.min() >= 0.0 and trace.max() == peak
         peaks.append(trace.max())
     assert max(peaks) > 10.0  # a real contact
     env.close()
