@@ -205,3 +205,23 @@ def test_sb3_model_trained_on_rl_actions_is_evaluated_in_its_mode(tmp_path, monk
     for prefix, controller in (("sb3:", "impact"), ("sb3_impedance:", "impedance")):
         spec = resolve_method(f"{prefix}{zip_path}")
         assert (spec.controller, spec.action_mode) == (controller, "delta")
+
+
+def test_camera_methods_make_their_envs_with_the_checkpoint_cameras():
+    """``vanilla_dp_rgb`` / ``impact_rgb``: the env observes the two cameras (no object pose),
+    and the two methods share envs only with methods of the same observation."""
+    from impact_eval.envs import method_env
+    from impact_eval.methods import RGB_OBSERVATION
+
+    rgb, impact_rgb = resolve_method("vanilla_dp_rgb"), resolve_method("impact_rgb")
+    assert rgb.observation == impact_rgb.observation == RGB_OBSERVATION
+    assert (rgb.controller, impact_rgb.controller) == ("impedance", "impact")
+    assert rgb.env_key != resolve_method("vanilla_dp").env_key
+    env = method_env("IMPACT/Hammer-v0", rgb)
+    try:
+        spaces = env.observation_space.spaces
+        assert spaces["overview_rgb"].shape == spaces["wrist_rgb"].shape == (96, 96, 3)
+        assert "object_pos" not in spaces and "goal_pos" not in spaces
+        assert env.unwrapped.observation_options == RGB_OBSERVATION
+    finally:
+        env.close()
