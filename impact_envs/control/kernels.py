@@ -211,7 +211,7 @@ def controller_tick(
     imp = unpack_impedance(state.imp.buffer, state.imp.scalars)[0]
     lim = unpack_limiter(state.lim.buffer, state.lim.scalars)[0]
     model32, weights, biases, model = state.model32, state.weights, state.biases, state.model
-    par, grams, wrench_maps, w_ff = tick.params, tick.grams, tick.wrench_maps, tick.wrench_ff
+    par, grams, wrench_maps = tick.params, tick.grams, tick.wrench_maps
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
     regularized_wrench_map(dyn.jacobian, par.lambda_sq, grams[0], wrench_maps[0])
@@ -236,6 +236,23 @@ def controller_tick(
         target = guard.target  # w_slow; force axes held by the guard replaced
         flags = model_gate_step(target, slow_rate, mask, m)
         flags = learner_tick(flags, target, mask, m32, m, weights, biases, state.learner)
+    _feedforward(pred, wrench_cmd, mask, guard, tick)  # w_ff, w_ff + w_cmd
+    wrench_map_null = wrench_maps[0] if par.maps_shared else wrench_maps[1]
+    impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, tick.wrench_extra,
+                  imp)
+    torque_limiter(imp.tau_no_gravity, imp.tau_gravity, lim)
+    _fill_scalars(imp.pose_error, slow_rate, m, par.run_model, tick)
+    for v in lim.output:
+        if not math.isfinite(v):
+            flags |= NON_FINITE
+    return flags
+
+
+@njit(cache=True, inline="always")
+def _feedforward(pred, wrench_cmd, mask, guard, tick) -> None:
+    """The tick's feedforward w_ff (the prediction, per axis; 0 in mode "impedance") and
+    w_ff + w_cmd, which the impedance law maps by J^T."""
+    par, w_ff = tick.params, tick.wrench_ff
     for i in range(6):
         tick.wrench_cmd[i] = wrench_cmd[i]
         if not par.apply_feedforward:
@@ -248,15 +265,6 @@ def controller_tick(
         guard_feedforward(w_ff, mask, guard)  # hold and bounds (a no-op when disabled)
     for i in range(6):
         tick.wrench_extra[i] = w_ff[i] + wrench_cmd[i]
-    wrench_map_null = wrench_maps[0] if par.maps_shared else wrench_maps[1]
-    impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, tick.wrench_extra,
-                  imp)
-    torque_limiter(imp.tau_no_gravity, imp.tau_gravity, lim)
-    _fill_scalars(imp.pose_error, slow_rate, m, par.run_model, tick)
-    for v in lim.output:
-        if not math.isfinite(v):
-            flags |= NON_FINITE
-    return flags
 
 
 @njit(cache=True, inline="always")
