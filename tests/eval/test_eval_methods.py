@@ -150,18 +150,24 @@ SHIPPED = sorted((p.parent.name, p.name) for p in
                  (Path(__file__).parents[2] / "impact_envs" / "checkpoints").glob("*/*"))
 
 
+VARIANT_METHOD = {"vanilla": "vanilla_dp", "augmented": "augmented_dp", "impact": "impact",
+                  "vanilla_rgb": "vanilla_dp_rgb"}
+"""The method that loads each checkpoint variant."""
+
+
 @pytest.mark.parametrize("env_name, variant", SHIPPED)
 def test_shipped_checkpoint_loads_and_acts_in_its_env(env_name: str, variant: str,
                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     """Every shipped checkpoint loads without pickle and emits in-space actions for its env."""
     import impact_envs
     from impact_envs.policies.interface import stack_obs
+    from impact_eval.envs import method_env
 
     monkeypatch.delenv(CHECKPOINTS_ENV_VAR, raising=False)
     env_id = next(e for e in impact_envs.ENV_IDS if env_short_name(e) == env_name)
-    method = "vanilla_dp" if variant == "vanilla" else "augmented_dp"
-    env = gym.make(env_id)
-    policy = resolve_method(method).build(env_id, env)
+    spec = resolve_method(VARIANT_METHOD[variant])
+    env = method_env(env_id, spec)  # the method's controller and observation (cameras)
+    policy = spec.build(env_id, env)
     obs, _ = env.reset(seed=0)
     policy.reset(2)
     actions = policy.act(stack_obs([obs, obs]))
