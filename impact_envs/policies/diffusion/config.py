@@ -173,16 +173,7 @@ class DiffusionConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> DiffusionConfig:
         """Build a config from ``to_dict`` output; unknown keys raise InvalidArgumentError."""
-        names = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(set(data) - set(names))
-        if unknown:
-            raise InvalidArgumentError(
-                f"unknown DiffusionConfig keys {unknown}; valid keys: {', '.join(names)}"
-            )
-        defaults = cls()
-        for name, value in data.items():
-            _check_field_type(name, value, getattr(defaults, name))
-        return cls(**data)
+        return _checked(cls, data, "DiffusionConfig keys", "")
 
     def to_json(self, path: str | Path) -> None:
         """Write the config as indented JSON to ``path``."""
@@ -256,15 +247,7 @@ class ImageEncoderConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ImageEncoderConfig:
         """Build from ``to_dict`` output; unknown keys or wrong types are one-line errors."""
-        names = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(set(data) - set(names))
-        if unknown:
-            raise InvalidArgumentError(
-                f"unknown vision keys {unknown}; valid keys: {', '.join(names)}")
-        defaults = cls()
-        for name, value in data.items():
-            _check_field_type(f"vision.{name}", value, getattr(defaults, name))
-        return cls(**data)
+        return _checked(cls, data, "vision keys", "vision.")
 
     def crop_size(self, height: int, width: int) -> tuple[int, int]:
         """Crop ``(height, width)`` [px] of an image of that size."""
@@ -304,3 +287,16 @@ def _check_field_type(name: str, value: object, default: object) -> None:
         element = f" of {_kind(default[0], True)}" if isinstance(default, tuple) and default else ""
         raise InvalidArgumentError(
             f"invalid DiffusionConfig field {name}: {value!r}; valid: {_kind(default)}{element}")
+
+
+def _checked(cls: Any, data: dict[str, Any], what: str, prefix: str) -> Any:
+    """``cls(**data)`` after one-line errors for unknown keys and ill-typed values (a field's
+    type is its default's)."""
+    names = [f.name for f in dataclasses.fields(cls)]
+    unknown = sorted(set(data) - set(names))
+    if unknown:
+        raise InvalidArgumentError(f"unknown {what} {unknown}; valid keys: {', '.join(names)}")
+    defaults = cls()
+    for name, value in data.items():
+        _check_field_type(f"{prefix}{name}", value, getattr(defaults, name))
+    return cls(**data)
