@@ -12,6 +12,7 @@ import pytest
 from safetensors.torch import load_file, save_file
 
 import impact_envs
+from impact_envs.envs.options import ObservationOptions
 from impact_envs.errors import CheckpointError
 from impact_envs.policies.diffusion.compat import check_policy_env
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
@@ -22,8 +23,18 @@ SHIPPED = sorted(p.parent for p in ROOT.glob("*/*/model.safetensors"))
 
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_shipped_checkpoints_fit_their_env(path: Path) -> None:
+    """Each shipped checkpoint fits its env made as its demos were recorded (a visuomotor one
+    with the store's cameras); a visuomotor checkpoint on a state env is one line."""
     env_id = f"IMPACT/{path.parent.name.capitalize()}-v0"
-    check_policy_env(DiffusionPolicy.load(path), env_id, gym.make(env_id), str(path))
+    policy = DiffusionPolicy.load(path)
+    recorded = policy.meta["dataset"]["attrs"].get("observation")
+    kwargs = {}
+    if recorded is not None:
+        kwargs["observation"] = ObservationOptions(**{**recorded,
+                                                      "cameras": tuple(recorded["cameras"])})
+        with pytest.raises(CheckpointError, match="needs camera images"):
+            check_policy_env(policy, env_id, gym.make(env_id), str(path))
+    check_policy_env(policy, env_id, gym.make(env_id, **kwargs), str(path))
 
 
 def test_checkpoint_of_another_task_is_refused() -> None:

@@ -67,6 +67,11 @@ def _check_cameras(policy: DiffusionPolicy, env: gym.Env, where: str) -> None:
     attrs = policy.meta.get("dataset", {}).get("attrs", {})
     trained = attrs.get("observation") if isinstance(attrs, dict) else None
     options = getattr(env.unwrapped, "observation_options", None)
+    if options is not None and not options.uses_images:
+        raise CheckpointError(
+            f"checkpoint {where} needs camera images {list(policy.cfg.vision.image_keys)}; "
+            "the env observes the state only: make it with ObservationOptions(obs_mode='rgb', "
+            "...) as the checkpoint's demos were recorded")
     if not isinstance(trained, dict) or options is None:
         return  # a checkpoint or env that does not say: the keys and sizes were checked
     for name in CAMERA_FIELDS:
