@@ -235,11 +235,8 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
     sent, reason, end, strikes, held, message = np.zeros(7), "", None, 0, 0, ""
     success, robot_t0 = 1.0, None
     source.start(pos, quat, arm)
-    gc.collect()  # no garbage collection inside the 1 kHz loop: a full collection of a large
-    gc.freeze()   # heap took 18 ms here (missed cycles); reference counting still frees
-    gc.disable()  # what the loop drops, and collection resumes when it ends
+    _pause_gc()
     start = time.perf_counter()
-    sig = controller.signals
     try:
         active = _start_torque_control(robot, plf)
         with _StopRequest() as stop:
@@ -267,12 +264,7 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
                 scale = _ramp(now, end, ramp_s)
                 limit_rate_libfranka_kernel(cmd * scale, sent.copy(),
                                             LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S, sent)
-                ext, pred, err = sig.wrench_ext_world, sig.wrench_pred_world, sig.pose_error
-                rows.append((now, sig.pos_error_norm_m, err[0], err[1], err[2], ext[0], ext[1],
-                             ext[2], sig.wrench_slow_world[2], pred[0], pred[1], pred[2],
-                             sig.wrench_imp_world[2],
-                             sig.wrench_ff_world[2], int(sig.gate_open),
-                             int(controller.guard.holding), rate, cost))
+                rows.append(_tick_row(now, controller, rate, cost))
                 done = end is not None and scale == 0.0 and not np.any(sent)
                 torques = plf.Torques(sent.tolist())
                 torques.motion_finished = done
@@ -289,6 +281,25 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
     report = _report(pd.DataFrame(rows, columns=TICK_COLUMNS), time.perf_counter() - start,
                      float(np.linalg.norm(pos - first.pos_ee)), robot, reason, held)
     return replace(report, robot_message=message, command_success_rate_min=success)
+
+
+def _pause_gc() -> None:
+    """No garbage collection inside the 1 kHz loop: a full collection of a large heap took
+    18 ms here (missed cycles). Reference counting still frees what the loop drops; the loop's
+    ``finally`` re-enables collection."""
+    gc.collect()
+    gc.freeze()
+    gc.disable()
+
+
+def _tick_row(now: float, controller: ImpactController, rate: float, cost: float) -> tuple:
+    """One ``ticks.csv`` row (``TICK_COLUMNS``) from the controller's last tick."""
+    sig = controller.signals
+    ext, pred, err = sig.wrench_ext_world, sig.wrench_pred_world, sig.pose_error
+    return (now, sig.pos_error_norm_m, err[0], err[1], err[2], ext[0], ext[1], ext[2],
+            sig.wrench_slow_world[2], pred[0], pred[1], pred[2], sig.wrench_imp_world[2],
+            sig.wrench_ff_world[2], int(sig.gate_open), int(controller.guard.holding), rate,
+            cost)
 
 
 def _start_torque_control(robot: object, plf: object) -> object:
