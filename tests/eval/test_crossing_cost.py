@@ -1,0 +1,20 @@
+"""``impact_eval.experiments.crossing_cost``: it captures the loop tick's real arguments."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+
+from impact_envs.control.kernels import ControllerState
+from impact_eval.experiments.crossing_cost import loop_arguments, main
+
+
+def test_loop_arguments_are_the_closed_loops_and_the_report_prints(capsys) -> None:
+    env = gym.make("IMPACT/Hammer-v0", controller="impact")
+    env.reset(seed=0)
+    args = loop_arguments(env)
+    assert len(args) == 7 and isinstance(args[-1], ControllerState)
+    assert args[-1].tick.buffer is env.unwrapped.controller.kernel_state().tick.buffer
+    env.close()
+    main(["--calls", "50", "--repeat", "1"])
+    out = capsys.readouterr().out
+    assert "the loop tick's arguments, all:" in out and "ControllerState.learner:" in out
