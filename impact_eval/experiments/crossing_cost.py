@@ -69,6 +69,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--calls", type=int, default=20000)
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args(argv)
+    if args.calls < 1 or args.repeat < 1:
+        parser.error(f"--calls and --repeat must be >= 1, got {args.calls} and {args.repeat}")
     env = gym.make("IMPACT/Hammer-v0", controller="impact")
     env.reset(seed=0)
     loop_args = loop_arguments(env)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gymnasium as gym
+import pytest
 
 from impact_envs.control.kernels import ControllerState
 from impact_eval.experiments.crossing_cost import loop_arguments, main
@@ -18,3 +19,10 @@ def test_loop_arguments_are_the_closed_loops_and_the_report_prints(capsys) -> No
     main(["--calls", "50", "--repeat", "1"])
     out = capsys.readouterr().out
     assert "the loop tick's arguments, all:" in out and "ControllerState.learner:" in out
+
+
+def test_non_positive_counts_are_one_line(capsys) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--calls", "0"])
+    assert exit_info.value.code == 2
+    assert "--calls and --repeat must be >= 1" in capsys.readouterr().err

@@ -94,6 +94,7 @@ class InternalModel:
             cfg.replay_capacity, cfg.batch_size, self.input_dim, weights, cfg.learning_rate,
             cfg.samples_per_tick, cfg.learner == "numba")
         lrn = self.learner
+        self._counters = unpack_counters(lrn.scal)[0]  # named views, made once
         self.replay = ReplayBuffer(cfg.replay_capacity, self.input_dim, 6, seed=cfg.seed,
                                    storage=(lrn.inputs, lrn.targets, lrn.masks, lrn.scal))
         self._reseed_learner()
@@ -139,15 +140,15 @@ class InternalModel:
     @property
     def n_updates(self) -> int:
         """SGD steps taken since construction / ``reinitialize``."""
-        return int(unpack_counters(self.learner.scal)[0].n_updates[0])
+        return int(self._counters.n_updates[0])
 
     @n_updates.setter
     def n_updates(self, value: int) -> None:
-        unpack_counters(self.learner.scal)[0].n_updates[0] = value
+        self._counters.n_updates[0] = value
 
     def _reseed_learner(self) -> None:
         """Drop a pending in-kernel SGD step and reseed its replay sampler."""
-        unpack_counters(self.learner.scal)[0].pending[0] = 0.0
+        self._counters.pending[0] = 0.0
         self.learner.rng[0] = np.uint64(self.config.seed)
 
     @property
