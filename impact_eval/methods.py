@@ -16,6 +16,7 @@ machinery tested) without the scripted experts, diffusion policies or Stable-Bas
 | `impact_warm`     | as `impact`, warm internal model         | `impact`    |
 | `vanilla_dp_rgb`  | visuomotor DP checkpoint `<env>/vanilla_rgb`, cameras only | `impedance` |
 | `impact_rgb`      | the same checkpoint                      | `impact`    |
+| `impact_rgb_paper` | the same checkpoint                     | `impact`, preset `paper` |
 | `scripted_impact_paper` | scripted expert                    | `impact`, preset `paper` |
 | `sb3:<path.zip>`  | any SB3 algorithm's policy, deterministic (``sb3.py``) | `impact` |
 | `sb3_impedance:<path.zip>` | the same | `impedance` |
@@ -231,5 +232,8 @@ for _spec in (
                observation=RGB_OBSERVATION),
     MethodSpec("impact_rgb", "impact", _dp_factory("vanilla_rgb"),
                "visuomotor Vanilla DP + IMPACT controller", observation=RGB_OBSERVATION),
+    MethodSpec("impact_rgb_paper", "impact", _dp_factory("vanilla_rgb"),
+               "visuomotor Vanilla DP + IMPACT controller, paper preset", preset="paper",
+               observation=RGB_OBSERVATION),
 ):
     register_method(_spec)

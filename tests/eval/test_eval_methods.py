@@ -214,14 +214,17 @@ def test_sb3_model_trained_on_rl_actions_is_evaluated_in_its_mode(tmp_path, monk
 
 
 def test_camera_methods_make_their_envs_with_the_checkpoint_cameras():
-    """``vanilla_dp_rgb`` / ``impact_rgb``: the env observes the two cameras (no object pose),
-    and the two methods share envs only with methods of the same observation."""
+    """``vanilla_dp_rgb`` / ``impact_rgb`` / ``impact_rgb_paper``: the env observes the two
+    cameras (no object pose), and these methods share envs only with methods of the same
+    observation."""
     from impact_eval.envs import method_env
     from impact_eval.methods import RGB_OBSERVATION
 
     rgb, impact_rgb = resolve_method("vanilla_dp_rgb"), resolve_method("impact_rgb")
-    assert rgb.observation == impact_rgb.observation == RGB_OBSERVATION
+    paper = resolve_method("impact_rgb_paper")
+    assert rgb.observation == impact_rgb.observation == paper.observation == RGB_OBSERVATION
     assert (rgb.controller, impact_rgb.controller) == ("impedance", "impact")
+    assert (paper.controller, paper.preset, impact_rgb.preset) == ("impact", "paper", "default")
     assert rgb.env_key != resolve_method("vanilla_dp").env_key
     env = method_env("IMPACT/Hammer-v0", rgb)
     try:
