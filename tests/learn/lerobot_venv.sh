@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# The LeRobot virtualenv that tests/learn/test_lerobot_export.py loads exports with
-# (docs/lerobot.md):
+# The LeRobot virtualenv that tests/learn/test_lerobot_export.py loads exports with, and in
+# which examples/lerobot_round_trip.py trains LeRobot's DiffusionPolicy and evaluates it with
+# this package (docs/lerobot.md):
 #   bash tests/learn/lerobot_venv.sh [VENV]   (default .ci-lerobot-venv), then
-#   IMPACT_LEROBOT_PYTHON=VENV/bin/python python -m pytest tests/learn/test_lerobot_export.py
+#   IMPACT_LEROBOT_PYTHON=VENV/bin/python python -m pytest tests/learn/test_lerobot_export.py \
+#       tests/learn/test_lerobot_round_trip.py
 # lerobot 0.4.4 is the newest release for Python 3.11 (0.5+ needs 3.12); it pins torch < 2.11,
 # and only torch 2.13 (CPU) installs here, so lerobot goes in without its pins (--no-deps)
 # beside torch 2.13 with what its dataset code imports. torchvision 0.28.0 (torch 2.13's) is
@@ -21,3 +23,6 @@ python3 -m venv "$VENV"
 "$VENV/bin/pip" install -q "datasets>=4,<5" "huggingface-hub>=0.34.2,<0.36" "av>=15,<16" \
   "accelerate>=1.10,<2" jsonlines "packaging<26" draccus==0.10.0 einops termcolor deepdiff \
   "imageio[ffmpeg]" pandas pyarrow
+# lerobot.policies (the round trip) also imports diffusers and pyserial; then this package
+"$VENV/bin/pip" install -q "diffusers>=0.30,<0.50" pyserial
+"$VENV/bin/pip" install -q -e "$(cd "$(dirname "$0")/../.." && pwd)"

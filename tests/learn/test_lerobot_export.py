@@ -2,8 +2,8 @@
 the export loaded by lerobot's own ``LeRobotDataset`` in a virtualenv of its own.
 
 The load test needs ``IMPACT_LEROBOT_PYTHON`` (that virtualenv's python;
-``tests/learn/lerobot_venv.sh`` makes it, .ci/run sets it); it is skipped with that reason
-without it."""
+``tests/learn/lerobot_venv.sh`` makes it; run by hand, not in CI: docs/lerobot.md); it is
+skipped with that reason without it."""
 
 from __future__ import annotations
 
