@@ -1,10 +1,10 @@
 """The closed loop over robot/ and control/: sense -> control -> actuate -> step, at 1 kHz.
 
 One path for every task: ``ClosedLoop.run`` runs the ticks of one policy step, each one numba
-call (``tick.loop_tick``) followed by ``mj_step``; a task that declares a per-tick hook
-(``Task.has_tick_hook``) gets it called before each tick. ``control_tick`` is the same tick
-through the controller's public ``compute`` (what a real FR3 would run); tests/loop/test_loop.py
-checks that both give identical trajectories.
+call (``tick.bundled_tick`` on the step's ``TickArgs``) followed by ``mj_step``; a task that
+declares a per-tick hook (``Task.has_tick_hook``) gets it called before each tick.
+``control_tick`` is the same tick through the controller's public ``compute`` (what a real FR3
+would run); tests/loop/test_loop.py checks that both give identical trajectories.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from impact_envs.control.arm_model import dynamics_arrays
 from impact_envs.control.controller import ImpactController, describe_bad_input
 from impact_envs.control.kernels import BAD_INPUT
 from impact_envs.errors import SimulationError
-from impact_envs.loop.tick import ArmArrays, StepPlan, loop_tick
+from impact_envs.loop.tick import ArmArrays, StepPlan, bundle_tick_args, bundled_tick
 from impact_envs.robot.dynamics import PinocchioArm
 from impact_envs.robot.sim import FrankaSim
 
@@ -74,16 +74,22 @@ class ClosedLoop:
                              dynamics.q_model, dynamics.dq_model, dynamics.model_arrays)
         self._dyn = dynamics_arrays(dynamics)
         self._fric_model = np.zeros(7)
+        self._bundle: Callable[..., object] | None = None
         self._tick: Callable[..., int] | None = None
 
-    def _entry(self, args: tuple) -> Callable[..., int]:
-        """``loop_tick`` compiled for these argument types, resolved on the first step:
-        calling it skips numba's per-call type dispatch (about 0.1 us per array in a named
-        tuple, some 60 arrays here). Every array the loop passes is built here or by the
-        simulator and controller with fixed dtypes and dimensions, so the types never change."""
+    def _entries(self, args: tuple) -> tuple[Callable[..., object], Callable[..., int]]:
+        """``bundle_tick_args`` and ``bundled_tick`` compiled for these argument types,
+        resolved on the first step: calling them skips numba's per-call type dispatch (about
+        0.1 us per array, some 60 arrays here). Every array the loop passes is built here or
+        by the simulator and controller with fixed dtypes and dimensions, so the types never
+        change."""
         if self._tick is None:
-            self._tick = loop_tick.compile(tuple(numba.typeof(a) for a in args))
-        return self._tick
+            self._bundle = bundle_tick_args.compile(tuple(numba.typeof(a) for a in args))
+            bundled = self._bundle(*args)
+            self._tick = bundled_tick.compile(
+                (numba.typeof(0), numba.typeof(self.sim.frictionloss_torque()),
+                 numba.typeof(bundled)))
+        return self._bundle, self._tick
 
     def run(self, targets: TickTargets) -> StepTrace:
         """The ticks of one policy step (one per row of ``targets.positions``)."""
@@ -93,16 +99,16 @@ class ClosedLoop:
         plan = StepPlan(targets.noise, targets.positions, targets.quats, np.empty((n, 7)),
                         np.empty((n, 7)), np.empty(21), float(targets.gripper_cmd), cmd, mask,
                         self._fric_model)
-        sim_arrays, state = sim.loop_arrays(), ctrl.kernel_state()
-        tick = self._entry((0, sim.frictionloss_torque(), plan, sim_arrays, self.arm, self._dyn,
-                            state))
+        parts = (plan, sim.loop_arrays(), self.arm, self._dyn, ctrl.kernel_state())
+        bundle, tick = self._entries(parts)
+        args = bundle(*parts)
         contact = np.empty((n, 2))
         last = 0
         hook, data = self.tick_hook, sim.data
         for i in range(n):
             if hook is not None:
                 hook(sim, float(data.time))
-            flags = tick(i, sim.frictionloss_torque(), plan, sim_arrays, self.arm, self._dyn, state)
+            flags = tick(i, sim.frictionloss_torque(), args)
             if flags:
                 self._raise_or_learn(i, flags, plan, targets.learn_mask)
             sim.step()
@@ -110,7 +116,7 @@ class ClosedLoop:
                 contact[last:i + 1] = sim.contact_forces()
                 last = i + 1
         sim.check_finite()
-        plan.qvels[-1] = sim_arrays.qvel_arm
+        plan.qvels[-1] = parts[1].qvel_arm
         ctrl.finish_tick(0, plan.quat_targets[-1], targets.learn_mask)
         q, dq = plan.sensed[:7].copy(), plan.sensed[7:14].copy()
         peak_robot, peak_obj = (max(float(v), 0.0) for v in contact.max(axis=0))

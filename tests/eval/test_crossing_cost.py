@@ -18,7 +18,8 @@ def test_loop_arguments_are_the_closed_loops_and_the_report_prints(capsys) -> No
     env.close()
     main(["--calls", "50", "--repeat", "1"])
     out = capsys.readouterr().out
-    assert "the loop tick's arguments, all:" in out and "ControllerState.learner:" in out
+    assert "the loop tick's arguments, all, as they are:" in out
+    assert "bundled (what the loop passes):" in out and "ControllerState.learner:" in out
 
 
 def test_non_positive_counts_are_one_line(capsys) -> None:
