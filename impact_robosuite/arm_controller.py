@@ -17,6 +17,8 @@ rate-limited and saturated at the FR3's (= Panda's) limits, gravity compensation
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from robosuite.controllers.parts.controller import Controller
@@ -40,47 +42,70 @@ closed-loop policy that keeps pushing against a load would otherwise wind the go
 bound (seen: 10 m away after a few seconds under a 4 kg cube)."""
 
 
+@dataclass(frozen=True)
+class ArmOptions:
+    """Our settings of the arm controller: the keys of its robosuite config dict besides
+    robosuite's own (``registry.py`` builds them from that dict).
+
+    Attributes:
+        mode: ``"impact"`` or ``"impedance"`` (from the config's ``type``).
+        preset: Controller preset (``"default"`` or ``"paper"``, docs/controller.md).
+        input_max, input_min: Action range (scalar or 6 values), as OSC's.
+        output_max, output_min: Goal change per step at the action's range [m, rad], as OSC's.
+        goal_update_mode: ``"achieved"`` or ``"desired"`` (see the module docstring).
+        sensor_noise: Emulated encoder and torque-sensor noise on (``SensorNoise()``) or off.
+        finger_joints: The gripper's finger joints; their opening is an internal-model feature.
+    """
+
+    mode: str = "impact"
+    preset: str = "default"
+    input_max: float | Sequence[float] = 1
+    input_min: float | Sequence[float] = -1
+    output_max: float | Sequence[float] = OUTPUT_MAX
+    output_min: float | Sequence[float] = tuple(-v for v in OUTPUT_MAX)
+    goal_update_mode: str = "achieved"
+    sensor_noise: bool = True
+    finger_joints: Sequence[str] = ("gripper0_right_finger_joint1",
+                                    "gripper0_right_finger_joint2")
+
+    def __post_init__(self) -> None:
+        check_choice("goal_update_mode", self.goal_update_mode, GOAL_UPDATE_MODES)
+
+
 class ImpactArmController(Controller):
     """IMPACT or impedance on a robosuite arm.
 
     Args:
         sim, ref_name, joint_indexes, actuator_range, part_name, naming_prefix, lite_physics:
             what robosuite gives every arm controller.
-        mode: ``"impact"`` or ``"impedance"``.
-        preset: Controller preset (``"default"`` or ``"paper"``, docs/controller.md).
-        input_max, input_min, output_max, output_min: action scaling, as OSC's.
-        goal_update_mode: ``"achieved"`` or ``"desired"`` (see the module docstring).
-        sensor_noise: Emulated encoder and torque-sensor noise on (``SensorNoise()``) or off.
-        finger_joints: The gripper's finger joints; their opening is an internal-model feature.
+        options: Ours (``ArmOptions``; default: IMPACT, ``default`` preset, OSC's scaling).
     """
 
-    def __init__(self, sim, ref_name, joint_indexes, actuator_range, mode: str = "impact",
-                 preset: str = "default", input_max=1, input_min=-1, output_max=OUTPUT_MAX,
-                 output_min=tuple(-v for v in OUTPUT_MAX), goal_update_mode: str = "achieved",
-                 sensor_noise: bool = True,
-                 finger_joints=("gripper0_right_finger_joint1", "gripper0_right_finger_joint2"),
-                 part_name=None, naming_prefix=None, lite_physics=True) -> None:
-        check_choice("goal_update_mode", goal_update_mode, GOAL_UPDATE_MODES)
+    def __init__(self, sim, ref_name, joint_indexes, actuator_range,
+                 options: ArmOptions | None = None, part_name=None, naming_prefix=None,
+                 lite_physics=True) -> None:
+        options = options or ArmOptions()
         super().__init__(sim, joint_indexes, actuator_range, ref_name=ref_name,
                          part_name=part_name, naming_prefix=naming_prefix,
                          lite_physics=lite_physics)
         model = sim.model._model
         self.control_dim = 6
-        self.input_max = self.nums2array(input_max, 6)
-        self.input_min = self.nums2array(input_min, 6)
-        self.output_max = self.nums2array(output_max, 6)
-        self.output_min = self.nums2array(output_min, 6)
-        self.goal_update_mode = goal_update_mode
-        config = preset_at_timestep(preset, float(model.opt.timestep))
+        self.input_max = self.nums2array(options.input_max, 6)
+        self.input_min = self.nums2array(options.input_min, 6)
+        self.output_max = self.nums2array(options.output_max, 6)
+        self.output_min = self.nums2array(options.output_min, 6)
+        self.goal_update_mode = options.goal_update_mode
+        config = preset_at_timestep(options.preset, float(model.opt.timestep))
         self.arm_model = MujocoArm(model, self.joint_names, ref_name, sim.data.qpos.copy())
-        self.core = ImpactController(self.arm_model, config, mode)
-        noise = SensorNoise() if sensor_noise else SensorNoise.off()
+        self.core = ImpactController(self.arm_model, config, options.mode)
+        noise = SensorNoise() if options.sensor_noise else SensorNoise.off()
         self.sensors = ArmSensors(model, self.qpos_index, self.qvel_index, noise,
                                    include_friction=not lite_physics)
         try:
-            self._fingers = [model.joint(name).qposadr[0] for name in finger_joints]
+            self._fingers = [model.joint(name).qposadr[0] for name in options.finger_joints]
         except KeyError:
-            raise InvalidArgumentError(f"finger joints {list(finger_joints)} not in the model; "
+            raise InvalidArgumentError(f"finger joints {list(options.finger_joints)} not in the "
+                                       "model; "
                                        "give the gripper's finger_joints") from None
         self.goal_pos, self.goal_ori = None, None
         self.reset_goal()

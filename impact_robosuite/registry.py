@@ -2,20 +2,21 @@
 
 robosuite 1.5 builds arm controllers in ``controller_factory.arm_controller_factory``, a fixed
 chain of names with no registry; ``register()`` wraps that function once so the two names
-build an ``ImpactArmController`` and every other name goes to robosuite as before. Only the
-keys our constructor takes are passed on (robosuite's config dicts carry keys for OSC, such
-as ``kp`` or ``interpolation``, that mean nothing here).
+build an ``ImpactArmController`` and every other name goes to robosuite as before: robosuite's
+own arguments (``ROBOSUITE_ARGS``) are passed as they are, our keys become its ``ArmOptions``,
+and other keys are dropped (robosuite's config dicts carry keys for OSC, such as ``kp`` or
+``interpolation``, that mean nothing here).
 """
 
 from __future__ import annotations
 
-import inspect
+import dataclasses
 from pathlib import Path
 
 from robosuite.controllers.parts import controller_factory
 
 from impact_envs.errors import InvalidArgumentError, check_choice
-from impact_robosuite.arm_controller import ImpactArmController
+from impact_robosuite.arm_controller import ArmOptions, ImpactArmController
 
 CONTROLLER_TYPES = {"IMPACT": "impact", "IMPACT_IMPEDANCE": "impedance"}
 """robosuite ``type`` -> our controller mode."""
@@ -25,15 +26,21 @@ METHODS = ("osc", "impedance", "impact", "impact_paper")
 internal model (``default`` preset), and IMPACT with the paper's table read literally
 (``paper`` preset, docs/controller.md)."""
 
-_ACCEPTED = set(inspect.signature(ImpactArmController.__init__).parameters) - {"self", "mode"}
+ROBOSUITE_ARGS = frozenset({"sim", "ref_name", "joint_indexes", "actuator_range", "part_name",
+                            "naming_prefix", "lite_physics"})
+"""What robosuite's factory gives every arm controller."""
+_OPTIONS = frozenset(f.name for f in dataclasses.fields(ArmOptions)) - {"mode"}
+_ACCEPTED = ROBOSUITE_ARGS | _OPTIONS
 
 
 def _factory(original):
     def arm_controller_factory(name, params):
         if name not in CONTROLLER_TYPES:
             return original(name, params)
-        kwargs = {k: v for k, v in params.items() if k in _ACCEPTED}
-        return ImpactArmController(mode=CONTROLLER_TYPES[name], **kwargs)
+        given = {k: v for k, v in params.items() if k in ROBOSUITE_ARGS}
+        options = ArmOptions(mode=CONTROLLER_TYPES[name],
+                             **{k: v for k, v in params.items() if k in _OPTIONS})
+        return ImpactArmController(**given, options=options)
 
     arm_controller_factory.impact_original = original
     return arm_controller_factory

@@ -9,9 +9,12 @@ each one alone is in docs/results.md.
     ControllerConfig()                     # the "default" preset
     preset_config("paper")                 # the paper-literal table
     gym.make("IMPACT/Hammer-v0", controller_preset="paper")
+    preset_config("default", estimator="momentum")  # the momentum-observer estimator
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.overrides import apply_overrides
@@ -34,12 +37,17 @@ DEPARTURES: dict[str, str] = {
 keys, the syntax of ``--controller-set``; ``revert_departure`` applies one)."""
 
 
-def preset_config(name: str) -> ControllerConfig:
-    """The ``ControllerConfig`` of preset ``name`` (one of ``PRESETS``)."""
+def preset_config(name: str, estimator: str | None = None) -> ControllerConfig:
+    """The ``ControllerConfig`` of preset ``name`` (one of ``PRESETS``), with the wrench
+    estimator of kind ``estimator`` (``ESTIMATOR_KINDS``: "residual", the presets', or
+    "momentum") when given."""
     check_choice("controller preset", name, PRESETS)
-    if name == "default":
-        return ControllerConfig()
-    return revert_departures(ControllerConfig(), DEPARTURES)
+    config = ControllerConfig()
+    if name != "default":
+        config = revert_departures(config, DEPARTURES)
+    if estimator is None:
+        return config
+    return replace(config, estimator=replace(config.estimator, kind=estimator))
 
 
 def revert_departures(config: ControllerConfig, keys: object) -> ControllerConfig:

@@ -8,7 +8,6 @@ steps), runs the controller on *noisy* sensor readings every tick, and applies t
 from __future__ import annotations
 
 import copy
-import dataclasses
 import importlib
 from collections.abc import Mapping
 from numbers import Integral
@@ -19,7 +18,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from impact_envs.control.config import ControllerConfig, EstimatorConfig
+from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import CONTROLLERS, ImpactController
 from impact_envs.control.internal_model import ModelSnapshot
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
@@ -35,7 +34,6 @@ from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import ObsEntry, Task, refresh_constants
 
-ESTIMATORS = ("residual", "momentum")
 REWARD_TYPES = ("sparse", "dense")
 """``"sparse"``: 1.0 on steps where the task is accomplished, else 0.0 (default);
 ``"dense"``: the task's shaped ``dense_reward`` in [0, 1] (docs/envs.md)."""
@@ -70,15 +68,12 @@ def ticks_for_step(k: int) -> int:
     return (k + 1) * CONTROL_HZ // POLICY_HZ - k * CONTROL_HZ // POLICY_HZ
 
 
-def _controller_config(preset: str | ControllerConfig,
-                       estimator: str) -> tuple[ControllerConfig, str]:
-    """The env's controller config and its preset name: the named preset with the
-    ``estimator`` kind, or a ``ControllerConfig`` as given (named after the preset it equals,
-    else "custom")."""
+def _controller_config(preset: str | ControllerConfig) -> tuple[ControllerConfig, str]:
+    """The env's controller config and its preset name: the named preset, or a
+    ``ControllerConfig`` as given (named after the preset it equals, else "custom")."""
     if isinstance(preset, ControllerConfig):
         return preset, preset_name(preset)
-    cfg = dataclasses.replace(preset_config(preset), estimator=EstimatorConfig(kind=estimator))
-    return cfg, preset
+    return preset_config(preset), preset
 
 
 class ImpactEnv(gym.Env):
@@ -99,7 +94,6 @@ class ImpactEnv(gym.Env):
         controller: Literal["impact", "impedance"] = "impact",
         object_mass: float | None = None,
         task_params: dict[str, float] | None = None,
-        estimator: Literal["residual", "momentum"] = "residual",
         controller_preset: str | ControllerConfig = "default",
         robot: RobotOptions | None = None,
         persist_internal_model: bool = False,
@@ -111,7 +105,7 @@ class ImpactEnv(gym.Env):
     ) -> None:
         self._init_kwargs = {k: v for k, v in locals().items() if k not in ("self", "__class__")}
         """The constructor's arguments (``__deepcopy__`` and pickling rebuild from them)."""
-        self._check_args(controller, estimator, reward_type, controller_preset, render_mode)
+        self._check_args(controller, reward_type, controller_preset, render_mode)
         robot, render = robot or RobotOptions(), render or RenderOptions()
         self.reward_type, self.render_mode = reward_type, render_mode
         self.controller_mode = controller
@@ -125,7 +119,7 @@ class ImpactEnv(gym.Env):
         self._params = self._initial_params(object_mass, task_params)
         perturbation = ModelPerturbation(link_mass_scale=1.0 + float(robot.model_mass_error))
         self.dynamics = PinocchioArm(perturbation=perturbation)
-        cfg, self.controller_preset = _controller_config(controller_preset, estimator)
+        cfg, self.controller_preset = _controller_config(controller_preset)
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
         self.controller = ImpactController(self.dynamics, cfg, mode=controller)
         self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
@@ -150,11 +144,10 @@ class ImpactEnv(gym.Env):
         self._step_count, self._gripper_cmd, self._success_once = 0, -1.0, False
         self._target_pos, self._target_quat = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
 
-    def _check_args(self, controller: str, estimator: str, reward_type: str,
+    def _check_args(self, controller: str, reward_type: str,
                     controller_preset: str | ControllerConfig, render_mode: str | None) -> None:
         """One-line errors naming the valid choices."""
         check_choice("controller", controller, CONTROLLERS)
-        check_choice("estimator", estimator, ESTIMATORS)
         check_choice("reward_type", reward_type, REWARD_TYPES)
         if not isinstance(controller_preset, ControllerConfig):
             check_choice("controller_preset", controller_preset, PRESETS)

@@ -69,7 +69,7 @@ class CalligraphyEnv(ImpactEnv):
     ## Arguments
     ``controller`` ("impact" | "impedance"), ``task_params={"tool_mass": kg,
     "surface_friction": μ}`` or ``reset(options=...)`` (tool_mass default 0.1, range
-    0.02–5 kg, the sweep axis; surface_friction default 0.3, range 0.05–1.5), ``estimator``,
+    0.02–5 kg, the sweep axis; surface_friction default 0.3, range 0.05–1.5),
     ``controller_preset``, ``robot``, ``persist_internal_model``, ``terminate_on_success``,
     ``reward_type``, ``render_mode`` ("rgb_array"), ``render``, ``observation`` (as for
     ``IMPACT/Hammer-v0``).
@@ -92,6 +92,9 @@ class CalligraphyEnv(ImpactEnv):
       2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
       2026-11-26: pixel observations (``observation=ObservationOptions(...)``) and a
       ``"wrist"`` camera added; the default ``"state"`` mode is unchanged bit for bit.
+      2026-11-26: ``estimator`` removed from the constructor (no number changes): the
+      wrench estimator is a field of the controller's config, chosen with
+      ``controller_preset=preset_config("default", estimator="momentum")``.
     """
 
     @classmethod

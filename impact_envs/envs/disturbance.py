@@ -67,7 +67,7 @@ class DisturbanceEnv(ImpactEnv):
     ## Arguments
     ``controller`` ("impact" | "impedance"), ``task_params={"disturbance_n": N,
     "object_mass": kg, "added_mass": kg}`` or ``reset(options=...)`` (defaults 2 N, 0.3 kg,
-    0.3 kg; ranges 0–40 N, 0.05–5 kg, 0–5 kg), ``object_mass`` [kg] (shortcut), ``estimator``,
+    0.3 kg; ranges 0–40 N, 0.05–5 kg, 0–5 kg), ``object_mass`` [kg] (shortcut),
     ``controller_preset``, ``robot``, ``persist_internal_model``, ``terminate_on_success``,
     ``reward_type``, ``render_mode`` ("rgb_array"), ``render``, ``observation`` (as for
     ``IMPACT/Hammer-v0``).
@@ -86,6 +86,9 @@ class DisturbanceEnv(ImpactEnv):
       2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
       2026-11-26: pixel observations (``observation=ObservationOptions(...)``) and a
       ``"wrist"`` camera added; the default ``"state"`` mode is unchanged bit for bit.
+      2026-11-26: ``estimator`` removed from the constructor (no number changes): the
+      wrench estimator is a field of the controller's config, chosen with
+      ``controller_preset=preset_config("default", estimator="momentum")``.
     """
 
     @classmethod

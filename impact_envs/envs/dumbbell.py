@@ -63,7 +63,7 @@ class DumbbellEnv(ImpactEnv):
     ``terminate_on_success=True``. ``SimulationError`` if the physics diverges.
 
     ## Arguments
-    As for ``IMPACT/Hammer-v0`` (``controller``, ``estimator``, ``controller_preset``,
+    As for ``IMPACT/Hammer-v0`` (``controller``, ``controller_preset``,
     ``robot``, ``persist_internal_model``, ``terminate_on_success``, ``reward_type``,
     ``render_mode``, ``render``, ``observation``), with ``object_mass`` [kg] defaulting to 2.5
     (range 0.1–12).
@@ -82,6 +82,9 @@ class DumbbellEnv(ImpactEnv):
       2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
       2026-11-26: pixel observations (``observation=ObservationOptions(...)``) and a
       ``"wrist"`` camera added; the default ``"state"`` mode is unchanged bit for bit.
+      2026-11-26: ``estimator`` removed from the constructor (no number changes): the
+      wrench estimator is a field of the controller's config, chosen with
+      ``controller_preset=preset_config("default", estimator="momentum")``.
     """
 
     @classmethod

@@ -60,8 +60,9 @@ class HammerEnv(ImpactEnv):
 
     ## Arguments
     ``controller`` ("impact" | "impedance"), ``object_mass`` [kg] (default 0.2, range
-    0.05–12), ``estimator`` ("residual" | "momentum"), ``controller_preset`` ("default" |
-    "paper", docs/controller.md, or a ``ControllerConfig``; reported as
+    0.05–12), ``controller_preset`` ("default" | "paper", docs/controller.md, or a
+    ``ControllerConfig``, e.g. ``preset_config("default", estimator="momentum")`` for the
+    momentum-observer wrench estimator; reported as
     ``info["controller_preset"]``, a config as its preset's name or "custom"), ``robot``
     (``RobotOptions``: ``sensor_noise`` bool, ``grasp_force_n`` default 70 N,
     ``model_mass_error`` relative error of the controller's link masses),
@@ -87,6 +88,9 @@ class HammerEnv(ImpactEnv):
       2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
       2026-11-26: pixel observations (``observation=ObservationOptions(...)``) and a
       ``"wrist"`` camera added; the default ``"state"`` mode is unchanged bit for bit.
+      2026-11-26: ``estimator`` removed from the constructor (no number changes): the
+      wrench estimator is a field of the controller's config, chosen with
+      ``controller_preset=preset_config("default", estimator="momentum")``.
     """
 
     @classmethod

@@ -16,12 +16,11 @@
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
-from impact_envs.control.config import EstimatorConfig
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.lie import matrix_to_quat, so3_exp
 from impact_envs.control.presets import preset_config
@@ -48,7 +47,7 @@ class Rig:
               preset: str = "default") -> Rig:
         sim = FrankaSim(scene, (), noise=SensorNoise() if noise else SensorNoise.off())
         arm = PinocchioArm()
-        cfg = replace(preset_config(preset), estimator=EstimatorConfig(kind=estimator))
+        cfg = preset_config(preset, estimator=estimator)
         return cls(sim, arm, ImpactController(arm, cfg, mode=mode), np.random.default_rng(seed))
 
     def start(self, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 import torch
@@ -12,7 +10,6 @@ from fixtures.fake_dynamics import ConstantArmDynamics
 from impact_envs.control.config import (
     ContactGuardConfig,
     ControllerConfig,
-    EstimatorConfig,
     LimitsConfig,
 )
 from impact_envs.control.controller import ImpactController
@@ -184,7 +181,7 @@ def _simulate_payload(mode: str, seconds: float, estimator: str = "residual",
     """Closed loop on the fake arm: M ddq + C dq + g + b dq = tau + J^T w_ext (semi-implicit
     Euler), a 2.5 kg payload hanging on the TCP from t = 0.2 s."""
     dyn = ConstantArmDynamics(seed=21)
-    cfg = replace(preset_config(preset), estimator=EstimatorConfig(kind=estimator))
+    cfg = preset_config(preset, estimator=estimator)
     ctrl = ImpactController(dyn, cfg, mode=mode)
     q, dq = np.full(7, 0.1), np.zeros(7)
     ctrl.reset(q)

@@ -59,6 +59,17 @@ def test_preset_names_and_errors() -> None:
         revert_departures(ControllerConfig(), ["impedance.stiffness_translational_n_per_m"])
 
 
+def test_estimator_kind_is_chosen_on_the_preset() -> None:
+    for name in PRESETS:
+        assert preset_config(name, estimator="residual") == preset_config(name)
+        momentum = preset_config(name, estimator="momentum")
+        assert momentum.estimator.kind == "momentum" and preset_name(momentum) == "custom"
+        assert dataclasses.replace(momentum, estimator=preset_config(name).estimator) == (
+            preset_config(name))
+    with pytest.raises(InvalidArgumentError, match="valid choices: residual, momentum"):
+        preset_config("default", estimator="kalman")
+
+
 def test_env_kwarg_selects_the_preset_and_info_reports_it() -> None:
     for name in PRESETS:
         env = gym.make("IMPACT/Hammer-v0", controller_preset=name)

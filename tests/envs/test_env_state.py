@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from impact_envs import ENV_IDS
+from impact_envs.control.presets import preset_config
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
@@ -101,8 +102,9 @@ BAD_STATES = {
                       "controller"),
     "paper preset": (lambda: gym.make("IMPACT/Hammer-v0", controller_preset="paper"), None,
                      "preset"),
-    "momentum estimator": (lambda: gym.make("IMPACT/Hammer-v0", estimator="momentum"), None,
-                           "config differ"),
+    "momentum estimator": (lambda: gym.make(
+        "IMPACT/Hammer-v0", controller_preset=preset_config("default", estimator="momentum")),
+        None, "config differ"),
     "weight cut to one row": (None, _cut_weight, "weight"),
     "array cut short": (None, _cut_array, "array controller"),
     "array missing": (None, _drop_array, "array names differ"),

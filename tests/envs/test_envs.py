@@ -98,7 +98,7 @@ def test_mass_is_set_from_nominal_not_compounded():
     ("kwargs", "match"),
     [
         ({"controller": "pid"}, "valid choices: impedance, impact"),
-        ({"estimator": "kalman"}, "valid choices: residual, momentum"),
+        ({"controller_preset": "fast"}, "valid choices: default, paper"),
         ({"object_mass": -1.0}, "valid: 0.05 to 12.0 kg"),
         ({"render_mode": "depth"}, "valid choices: rgb_array"),
     ],
