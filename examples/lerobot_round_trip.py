@@ -144,6 +144,26 @@ def load(dataset: Path, run: Path) -> LeRobotPolicy:
     return LeRobotPolicy(policy, pre, post, feature_columns(dataset))
 
 
+def imitation_error(policy: LeRobotPolicy, store: Path, frames: int = 20) -> tuple[float, float]:
+    """Mean TCP-position error [m] of the policy's action at ``frames`` demo frames (one per
+    episode, its history fed first) against the demo's action, and of holding the current
+    TCP position instead: does the policy imitate before it is rolled out?"""
+    from impact_learn.dataset import load_replay
+
+    demos, rng = load_replay(store), np.random.default_rng(0)
+    starts, ends = np.r_[0, demos.episode_ends[:-1]], demos.episode_ends
+    policy_err, hold_err = [], []
+    for e in np.linspace(0, len(ends) - 1, frames).astype(int):
+        t = int(rng.integers(starts[e] + 1, ends[e]))
+        policy.reset(1)
+        for k in (t - 1, t):
+            action = policy.act({key: v[k:k + 1] for key, v in demos.data.items()})
+        target = demos.data["action"][t, :3]
+        policy_err.append(np.linalg.norm(action[0, :3] - target))
+        hold_err.append(np.linalg.norm(demos.data["ee_pos"][t] - target))
+    return float(np.mean(policy_err)), float(np.mean(hold_err))
+
+
 def main(argv: list[str] | None = None) -> None:
     """Collect, export, train, evaluate (see the module docstring)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -165,6 +185,9 @@ def main(argv: list[str] | None = None) -> None:
         lerobot_export.main(["--data", str(store), "--out", str(dataset)])
     if not (run / "model.safetensors").exists():
         train(dataset, run, args)
+    err, hold = imitation_error(load(dataset, run), store)
+    print(f"imitation: action position error on demo frames {100 * err:.1f} cm "
+          f"(holding the current TCP position: {100 * hold:.1f} cm)")
     masses = [float(m) for m in args.masses.split(",")]
     for controller in ("impedance", "impact"):
         where = out / f"eval_{controller}"

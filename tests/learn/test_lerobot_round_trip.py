@@ -37,9 +37,11 @@ def _example_module():
 def test_round_trip_trains_in_lerobot_and_evaluates_here(tmp_path) -> None:
     out = tmp_path / "rt"
     env = {**os.environ, "HF_HUB_OFFLINE": "1", "OMP_NUM_THREADS": "1"}
-    subprocess.run([os.environ["IMPACT_LEROBOT_PYTHON"], str(EXAMPLE), "--out", str(out),
-                    "--demos", "3", "--steps", "10", "--batch-size", "8", "--episodes", "2",
-                    "--masses", "0.2"], check=True, env=env, cwd=ROOT, timeout=900)
+    run = subprocess.run([os.environ["IMPACT_LEROBOT_PYTHON"], str(EXAMPLE), "--out", str(out),
+                          "--demos", "3", "--steps", "10", "--batch-size", "8", "--episodes",
+                          "2", "--masses", "0.2"], check=True, env=env, cwd=ROOT, timeout=900,
+                         capture_output=True, text=True)
+    assert "imitation: action position error on demo frames" in run.stdout
     # LeRobot's own checkpoint and processors, saved without pickle
     assert (out / "lerobot_policy" / "model.safetensors").stat().st_size > 0
     for controller in ("impedance", "impact"):
