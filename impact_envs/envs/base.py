@@ -8,7 +8,6 @@ steps), runs the controller on *noisy* sensor readings every tick, and applies t
 from __future__ import annotations
 
 import copy
-import importlib
 from collections.abc import Mapping
 from numbers import Integral
 from typing import Any, Literal
@@ -19,61 +18,31 @@ import numpy as np
 from gymnasium import spaces
 
 from impact_envs.control.config import ControllerConfig
-from impact_envs.control.controller import CONTROLLERS, ImpactController
+from impact_envs.control.controller import ImpactController
 from impact_envs.control.internal_model import ModelSnapshot
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
-from impact_envs.control.presets import PRESETS, preset_config, preset_name
+from impact_envs.envs.arguments import (
+    check_args,
+    controller_config,
+    initial_params,
+    load_task,
+)
+from impact_envs.envs.observation_space import state_space
 from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.envs.pixels import PixelObservations, check_view
 from impact_envs.envs.state import EnvState, capture, restore
-from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import ClosedLoop, TickTargets
 from impact_envs.rates import CONTROL_HZ, POLICY_HZ
 from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
 from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.sim import FrankaSim
-from impact_envs.tasks.base import ObsEntry, Task, refresh_constants
-
-REWARD_TYPES = ("sparse", "dense")
-"""``"sparse"``: 1.0 on steps where the task is accomplished, else 0.0 (default);
-``"dense"``: the task's shaped ``dense_reward`` in [0, 1] (docs/envs.md)."""
-
-
-ROBOT_OBSERVATIONS = (
-    ObsEntry("ee_pos", 3, -2.0, 2.0, "m", "TCP position, forward kinematics of the encoders"),
-    ObsEntry("ee_rot6d", 6, -1.0, 1.0, "", "TCP orientation, rot6d"),
-    ObsEntry("gripper_width", 1, 0.0, 0.1, "m", "finger opening"),
-    ObsEntry("joint_pos", 7, -np.inf, np.inf, "rad", "encoder reading (bounds: joint limits "
-             "+- 0.1 rad)"),
-    ObsEntry("joint_vel", 7, -10.0, 10.0, "rad/s", "encoder velocity reading"),
-)
-"""The robot's observation entries, first in every env (no force sensing in observations)."""
-
-
-def _load_task(ref: str) -> Task:
-    """A task instance from ``"module:TaskClass"`` (the generic env's ``task`` argument)."""
-    module, _, name = ref.partition(":")
-    try:
-        task_cls = getattr(importlib.import_module(module), name)
-    except (ImportError, AttributeError, ValueError) as exc:
-        raise InvalidArgumentError(f"cannot load task {ref!r}: {exc}; valid: "
-                                   "'module:TaskClass' of an importable Task") from None
-    if not (isinstance(task_cls, type) and issubclass(task_cls, Task)):
-        raise InvalidArgumentError(f"task {ref!r} is not a Task subclass")
-    return task_cls()
+from impact_envs.tasks.base import Task, refresh_constants
 
 
 def ticks_for_step(k: int) -> int:
     """Control ticks in policy step ``k``: 33 or 34, summing to exactly 1000 per 30 steps."""
     return (k + 1) * CONTROL_HZ // POLICY_HZ - k * CONTROL_HZ // POLICY_HZ
-
-
-def _controller_config(preset: str | ControllerConfig) -> tuple[ControllerConfig, str]:
-    """The env's controller config and its preset name: the named preset, or a
-    ``ControllerConfig`` as given (named after the preset it equals, else "custom")."""
-    if isinstance(preset, ControllerConfig):
-        return preset, preset_name(preset)
-    return preset_config(preset), preset
 
 
 class ImpactEnv(gym.Env):
@@ -105,21 +74,22 @@ class ImpactEnv(gym.Env):
     ) -> None:
         self._init_kwargs = {k: v for k, v in locals().items() if k not in ("self", "__class__")}
         """The constructor's arguments (``__deepcopy__`` and pickling rebuild from them)."""
-        self._check_args(controller, reward_type, controller_preset, render_mode)
+        check_args(controller, reward_type, controller_preset, render_mode,
+                   self.metadata["render_modes"])
         robot, render = robot or RobotOptions(), render or RenderOptions()
         self.reward_type, self.render_mode = reward_type, render_mode
         self.controller_mode = controller
         self.terminate_on_success = bool(terminate_on_success)
         self.persist_internal_model = bool(persist_internal_model)
-        self.task = task = self.make_task() if task is None else _load_task(task)
+        self.task = task = self.make_task() if task is None else load_task(task)
         noise = SensorNoise() if robot.sensor_noise else SensorNoise.off()
         self.sim = FrankaSim(task.scene_xml, task.object_bodies,
                              grasp_force_n=robot.grasp_force_n, noise=noise)
         task.bind(self.sim)
-        self._params = self._initial_params(object_mass, task_params)
+        self._params = initial_params(task, object_mass, task_params)
         perturbation = ModelPerturbation(link_mass_scale=1.0 + float(robot.model_mass_error))
         self.dynamics = PinocchioArm(perturbation=perturbation)
-        cfg, self.controller_preset = _controller_config(controller_preset)
+        cfg, self.controller_preset = controller_config(controller_preset)
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
         self.controller = ImpactController(self.dynamics, cfg, mode=controller)
         self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
@@ -133,7 +103,7 @@ class ImpactEnv(gym.Env):
             high=np.concatenate([task.workspace_high, np.ones(7)]).astype(np.float32),
             dtype=np.float32,
         )
-        self._state_space = self._make_observation_space()
+        self._state_space = state_space(self.dynamics, task)
         obs_opts = observation or ObservationOptions()
         self.observation_options = obs_opts
         """What the observation holds (``ObservationOptions``; ``"state"`` mode by default)."""
@@ -144,50 +114,12 @@ class ImpactEnv(gym.Env):
         self._step_count, self._gripper_cmd, self._success_once = 0, -1.0, False
         self._target_pos, self._target_quat = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
 
-    def _check_args(self, controller: str, reward_type: str,
-                    controller_preset: str | ControllerConfig, render_mode: str | None) -> None:
-        """One-line errors naming the valid choices."""
-        check_choice("controller", controller, CONTROLLERS)
-        check_choice("reward_type", reward_type, REWARD_TYPES)
-        if not isinstance(controller_preset, ControllerConfig):
-            check_choice("controller_preset", controller_preset, PRESETS)
-        if render_mode is not None:
-            check_choice("render_mode", render_mode, self.metadata["render_modes"])
-
     def _check_render(self, render: RenderOptions) -> None:
         """The camera must be one of the scene's and the size fit its offscreen buffer."""
         check_view(self.sim.model, "render size", (render.camera,), render.width,
                    render.height)
 
-    def _initial_params(self, object_mass: float | None,
-                        task_params: dict[str, float] | None) -> dict[str, float]:
-        """The task's defaults, then the ``object_mass`` shorthand, then ``task_params``."""
-        task = self.task
-        params = {p.name: p.default for p in task.params}
-        if object_mass is not None:
-            params[task.param("object_mass").name] = task.param("object_mass").validate(
-                object_mass)
-        for name, value in (task_params or {}).items():
-            params[name] = task.param(name).validate(value)
-        return params
-
     # ------------------------------------------------------------------ spaces
-    def _make_observation_space(self) -> spaces.Dict:
-        """The robot's entries (``ROBOT_OBSERVATIONS``, joint bounds from the model) then the
-        task's declared ones, in that order."""
-        dyn = self.dynamics
-        bounds = {"joint_pos": (dyn.q_lower - 0.1, dyn.q_upper + 0.1)}
-        entries = (*ROBOT_OBSERVATIONS, *self.task.observations)
-        names = [e.name for e in entries]
-        if len(set(names)) != len(names):
-            raise InvalidArgumentError(f"{self.task.name}: observation names repeat: {names}")
-        return spaces.Dict({
-            e.name: spaces.Box(*(np.broadcast_to(b, (e.size,)).astype(np.float32)
-                                 for b in bounds.get(e.name, (e.low, e.high))),
-                               dtype=np.float32)
-            for e in entries
-        })
-
     # ------------------------------------------------------------------ params
     @property
     def param_name(self) -> str:

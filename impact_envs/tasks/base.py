@@ -142,8 +142,9 @@ class Task(ABC):
     env_id: ClassVar[str]
     """Gymnasium id under which ``tasks/registry.py`` registers the task's env."""
     observations: ClassVar[tuple[ObsEntry, ...]]
-    """The task's observation entries (after the robot's, ``envs/base.ROBOT_OBSERVATIONS``);
-    ``observation()`` returns exactly these keys."""
+    """The task's observation entries (after the robot's,
+    ``envs/observation_space.ROBOT_OBSERVATIONS``); ``observation()`` returns exactly these
+    keys."""
     privileged_observations: ClassVar[tuple[str, ...] | None] = None
     """Names of the task entries that a camera and the robot's own sensors cannot give
     (object poses, goals shown in the scene): the image observation modes leave them out
