@@ -9,7 +9,7 @@ Runs in a virtualenv that holds lerobot and this package (docs/lerobot.md, "Roun
 3. LeRobot's own ``DiffusionPolicy``, trained with LeRobot's dataset, processors and optimizer
    preset for ``--steps`` steps (a small U-Net so that it trains on a CPU);
 4. ``impact_eval.evaluate``: the LeRobot policy, wrapped in our two-method policy protocol,
-   on ``IMPACT/Hammer-v0`` over ``--masses`` under each controller.
+   on ``IMPACT/Hammer-v0`` over ``--masses`` under impedance, IMPACT and IMPACT's paper preset.
 
 Each stage is skipped when its output exists, so an interrupted run continues.
 """
@@ -26,27 +26,13 @@ import torch
 import impact_eval
 from impact_learn import collect as impact_collect
 from impact_learn import lerobot_export
+from impact_learn.lerobot_compat import define_missing_torchvision_ops
 
 ENV_ID = "IMPACT/Hammer-v0"
 REPO_ID = "impact/hammer-round-trip"  # a name only: the dataset is read from its folder
-
-
-def _define_missing_torchvision_ops() -> None:
-    """torchvision's PyPI wheel is built against CUDA torch; with a CPU torch its C ops do not
-    load and LeRobot's import fails registering fake kernels for ``nms``/``qnms``. Declare those
-    schemas so the import works (nothing here runs when the ops load; docs/lerobot.md)."""
-    import importlib.util
-
-    spec = importlib.util.find_spec("torchvision")
-    if spec is None or spec.origin is None:
-        return
-    try:
-        torch.ops.load_library(str(Path(spec.origin).parent / "_C.so"))
-    except OSError:
-        lib = torch.library.Library("torchvision", "DEF")  # noqa: TOR901
-        for op in ("nms", "qnms"):
-            lib.define(f"{op}(Tensor dets, Tensor scores, float iou_threshold) -> Tensor")
-        _define_missing_torchvision_ops.lib = lib  # keep the library alive
+RUNS = (("impedance", "impedance", "default"), ("impact", "impact", "default"),
+        ("impact_paper", "impact", "paper"))
+"""(label, controller, preset) of each evaluation: impedance, IMPACT, IMPACT's paper preset."""
 
 
 class LeRobotPolicy:
@@ -150,6 +136,7 @@ def imitation_error(policy: LeRobotPolicy, store: Path, frames: int = 20) -> tup
     TCP position instead: does the policy imitate before it is rolled out?"""
     from impact_learn.dataset import load_replay
 
+    torch.manual_seed(0)  # the diffusion noise: the same numbers on every run
     demos, rng = load_replay(store), np.random.default_rng(0)
     starts, ends = np.r_[0, demos.episode_ends[:-1]], demos.episode_ends
     policy_err, hold_err = [], []
@@ -164,6 +151,15 @@ def imitation_error(policy: LeRobotPolicy, store: Path, frames: int = 20) -> tup
     return float(np.mean(policy_err)), float(np.mean(hold_err))
 
 
+def _masses(text: str) -> list[float]:
+    """``--masses``: comma-separated numbers (kg); argparse reports anything else in one line."""
+    try:
+        return [float(m) for m in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"invalid masses {text!r}; valid: e.g. 0.2,2.5,5") from None
+
+
 def main(argv: list[str] | None = None) -> None:
     """Collect, export, train, evaluate (see the module docstring)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -171,11 +167,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--demos", type=int, default=100, help="scripted demos at 0.2 kg")
     parser.add_argument("--steps", type=int, default=500, help="LeRobot training steps")
     parser.add_argument("--batch-size", type=int, default=64)
-    parser.add_argument("--masses", default="0.2,2.5,5", help="kg, comma-separated")
+    parser.add_argument("--masses", default="0.2,2.5,5", type=_masses,
+                        help="kg, comma-separated")
     parser.add_argument("--episodes", type=int, default=10, help="per mass and controller")
     parser.add_argument("--seed", type=int, default=0, help="training seed")
     args = parser.parse_args(argv)
-    _define_missing_torchvision_ops()
+    define_missing_torchvision_ops()
     out = Path(args.out)
     store, dataset, run = out / "demos.zarr", out / "lerobot_dataset", out / "lerobot_policy"
     if not store.exists():
@@ -188,17 +185,15 @@ def main(argv: list[str] | None = None) -> None:
     err, hold = imitation_error(load(dataset, run), store)
     print(f"imitation: action position error on demo frames {100 * err:.1f} cm "
           f"(holding the current TCP position: {100 * hold:.1f} cm)")
-    masses = [float(m) for m in args.masses.split(",")]
-    for controller in ("impedance", "impact"):
-        where = out / f"eval_{controller}"
-        table = impact_eval.evaluate(load(dataset, run), ENV_ID, masses, where,
+    for label, controller, preset in RUNS:
+        where = out / f"eval_{label}"
+        table = impact_eval.evaluate(load(dataset, run), ENV_ID, args.masses, where,
                                      episodes=args.episodes, controller=controller,
-                                     name=f"lerobot_dp_{controller}",
+                                     controller_preset=preset, name=f"lerobot_dp_{label}",
                                      envs_per_worker=args.episodes,
                                      resume=(where / "episodes.csv").exists())
         rates = table.groupby("param_value")["success"].agg(["sum", "count"])
-        print(controller, {m: f"{int(r['sum'])}/{int(r['count'])}" for m, r in rates.iterrows()})
-
+        print(label, {m: f"{int(r['sum'])}/{int(r['count'])}" for m, r in rates.iterrows()})
 
 if __name__ == "__main__":
     main()

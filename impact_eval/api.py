@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from impact_envs.control.controller import CONTROLLERS
+from impact_envs.control.presets import PRESETS
 from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.interface import Policy
 from impact_eval.grid import format_value
@@ -116,6 +117,7 @@ def evaluate(
     *,
     episodes: int = 20,
     controller: str = "impact",
+    controller_preset: str = "default",
     name: str = "custom",
     param: str | None = None,
     seed: int = 0,
@@ -131,13 +133,15 @@ def evaluate(
         out: Output directory: ``episodes.csv``, ``summary.csv``, ``run.json``, ``plots/``.
         episodes: Episodes per value (paired seeds, as the CLI's).
         controller: ``"impact"`` or ``"impedance"``.
+        controller_preset: The controller's preset, ``"default"`` or ``"paper"``
+            (docs/controller.md, "Presets").
         name: The method's name in the CSV and plots; not a built-in method's name. It is
             registered for this call only.
         param: The parameter to sweep (default: the env's first).
         seed: Base seed of the episode seeds.
         envs_per_worker: Episodes run in lockstep (the batch size of ``policy.act``).
         resume: Continue an interrupted run in ``out``; every argument must be the same
-            (controller included), else the call is refused.
+            (controller and preset included), else the call is refused.
 
     Returns:
         The episodes table (one row per episode, the columns of ``episodes.csv``).
@@ -153,6 +157,7 @@ def evaluate(
     build = _policy_factory(policy)
     numbers = check_values(values)
     check_choice("controller", controller, CONTROLLERS)
+    check_choice("controller_preset", controller_preset, PRESETS)
     if not isinstance(env_id, str):
         raise InvalidArgumentError(f"invalid env_id {env_id!r}; valid: a registered env id")
     request = SweepRequest(
@@ -162,10 +167,13 @@ def evaluate(
         envs_per_worker=_check_int("envs_per_worker", envs_per_worker, 1),
         seed=_check_int("seed", seed, 0), resume=bool(resume),
     )
-    with temporary_method(MethodSpec(name, controller, build, "evaluate() policy object")):
+    spec = MethodSpec(name, controller, build, "evaluate() policy object",
+                      preset=controller_preset)
+    with temporary_method(spec):
         plan = prepare(request)
         args = {"env": env_id, "method": name, "grid": request.grid, "param": param,
-                "episodes": episodes, "out": str(out), "seed": seed, "controller": controller}
+                "episodes": episodes, "out": str(out), "seed": seed, "controller": controller,
+                "controller_preset": controller_preset}
         execute(plan, command=[sys.argv[0], "impact_eval.evaluate"], args=args)
     _raise_if_all_crashed(Path(out))
     return pd.read_csv(Path(out) / "episodes.csv", keep_default_na=False)

@@ -130,9 +130,22 @@ def _start(
             raise InvalidArgumentError(
                 f"{data_path} changed since the run started; use a new --out"
             )
+        if state.step > opts.steps:
+            raise InvalidArgumentError(
+                f"{out_dir} is at step {state.step}; valid: --steps >= {state.step}")
+    _note_schedule(state, opts.steps)
     out_dir.mkdir(parents=True, exist_ok=True)
     cfg.to_json(out_dir / "config.json")
     return cfg, data, state
+
+
+def _note_schedule(state: TrainState, steps: int) -> None:
+    """Record in the run's info (saved with every checkpoint and export) the schedule length
+    from this step on, when it changes: a run resumed with a larger ``--steps`` continues on
+    the longer cosine (``lr_at``), and its exports say so (``schedule``)."""
+    schedule = state.info.setdefault("schedule", [])
+    if not schedule or schedule[-1]["steps"] != steps:
+        schedule.append({"from_step": state.step, "steps": steps})
 
 
 def train(

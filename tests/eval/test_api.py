@@ -55,3 +55,18 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path):
     with pytest.raises(InvalidArgumentError, match="rejected"):
         impact_eval.evaluate(_Constant(), ENV_ID, [0.0], tmp_path / "y")
     assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
+
+
+def test_controller_preset_reaches_the_env_and_a_bad_one_is_one_line(tmp_path):
+    with pytest.raises(InvalidArgumentError, match="valid choices: default, paper") as err:
+        impact_eval.evaluate(_Constant(), ENV_ID, [1.0], tmp_path / "bad",
+                             controller_preset="literal")
+    assert "\n" not in str(err.value)
+    # the fake env takes no preset: "paper" is handed to gym.make and refused there, in one
+    # line, before anything is written (a plugin env never runs another configuration silently)
+    with pytest.raises(InvalidArgumentError, match="controller_preset") as err:
+        impact_eval.evaluate(_Constant(), ENV_ID, [1.0], tmp_path / "paper",
+                             controller_preset="paper")
+    assert "\n" not in str(err.value)
+    assert not (tmp_path / "bad").exists() and not (tmp_path / "paper").exists()
+

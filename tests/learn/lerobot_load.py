@@ -1,6 +1,7 @@
 """Load a LeRobot export with lerobot's own ``LeRobotDataset`` and dump what it returns.
 
-Run by the LeRobot virtualenv's Python (docs/lerobot.md), not by the project's::
+Run by the LeRobot virtualenv's Python (``tests/learn/lerobot_venv.sh``, which also installs this
+package; docs/lerobot.md), not by the project's::
 
     LEROBOT_PYTHON tests/learn/lerobot_load.py DATASET_DIR OUT.npz
 
@@ -13,33 +14,14 @@ read through ``dataset[i]`` (parquet row plus decoded video frames), ``item_inde
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
-import torch
 
-
-def _define_missing_torchvision_ops() -> None:
-    """torchvision's PyPI wheel is built against CUDA torch; with the CPU torch its C ops do
-    not load and its import fails registering fake kernels for ``nms``/``qnms``. Declare those
-    two schemas so the import (of which LeRobot's dataset code needs only transforms) works.
-    Nothing here runs when the ops load."""
-    import importlib.util
-
-    spec = importlib.util.find_spec("torchvision")
-    if spec is None or spec.origin is None:
-        return
-    try:
-        torch.ops.load_library(str(Path(spec.origin).parent / "_C.so"))
-    except OSError:
-        lib = torch.library.Library("torchvision", "DEF")  # noqa: TOR901
-        for op in ("nms", "qnms"):
-            lib.define(f"{op}(Tensor dets, Tensor scores, float iou_threshold) -> Tensor")
-        _define_missing_torchvision_ops.lib = lib  # keep the library alive
+from impact_learn.lerobot_compat import define_missing_torchvision_ops
 
 
 def main(root: str, out: str) -> None:
-    _define_missing_torchvision_ops()
+    define_missing_torchvision_ops()
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     ds = LeRobotDataset("impact/export-check", root=root)

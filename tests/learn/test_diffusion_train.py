@@ -99,6 +99,22 @@ def test_resume_is_bit_exact(data_path, tmp_path):
     _assert_same_run(tmp_path / "full", tmp_path / "split")
 
 
+def test_resume_with_more_steps_records_the_schedule_and_fewer_is_refused(data_path, tmp_path):
+    out = tmp_path / "run"
+    train(CFG, data_path, out, _opts(2))
+
+    def files() -> dict[str, bytes]:
+        return {str(f.relative_to(out)): f.read_bytes() for f in out.rglob("*") if f.is_file()}
+
+    before = files()
+    with pytest.raises(InvalidArgumentError, match=r"is at step 2; valid: --steps >= 2") as err:
+        train(CFG, data_path, out, _opts(1, resume=True))
+    assert "\n" not in str(err.value) and files() == before  # nothing written
+    train(CFG, data_path, out, _opts(4, resume=True))
+    assert DiffusionPolicy.load(out / "policy").meta["schedule"] == [
+        {"from_step": 0, "steps": 2}, {"from_step": 2, "steps": 4}]
+
+
 def test_resume_after_interruption(data_path, tmp_path, monkeypatch):
     cfg = DiffusionConfig(**{**CFG.to_dict(), "lr_warmup_steps": 1})  # cosine part matters
     train(cfg, data_path, tmp_path / "full", _opts(6))
