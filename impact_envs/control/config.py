@@ -20,19 +20,24 @@ from impact_envs.control.contact_guard import ContactGuardConfig
 from impact_envs.control.estimators import ESTIMATOR_KINDS, EstimatorConfig
 from impact_envs.control.impedance import ImpedanceConfig
 from impact_envs.control.internal_model.config import InternalModelConfig
+from impact_envs.control.joint_limits import JointLimitConfig
 from impact_envs.control.limits import (
     LIBFRANKA_DELTA_T_S,
     LimitsConfig,
     beyond_hardware_limits,
     libfranka_limits,
 )
+from impact_envs.control.payload_model import PayloadModelConfig
 from impact_envs.control.slow_filter import SlowWrenchConfig
+from impact_envs.control.target_filter import TargetFilterConfig
 from impact_envs.control.validation import check_positive
+from impact_envs.control.wrench_observer import WrenchObserverConfig
 from impact_envs.errors import InvalidArgumentError
 
 __all__ = ["ESTIMATOR_KINDS", "ContactGuardConfig", "ControllerConfig", "EstimatorConfig",
-           "ImpedanceConfig", "InternalModelConfig", "LimitsConfig", "SlowWrenchConfig",
-           "beyond_hardware_limits", "libfranka_limits"]
+           "ImpedanceConfig", "InternalModelConfig", "JointLimitConfig", "LimitsConfig",
+           "PayloadModelConfig", "SlowWrenchConfig", "TargetFilterConfig",
+           "WrenchObserverConfig", "beyond_hardware_limits", "libfranka_limits"]
 
 
 @dataclass(frozen=True)
@@ -47,6 +52,13 @@ class ControllerConfig:
         internal_model: Internal model / online learning settings.
         limits: Torque and torque-rate limits.
         guard: Contact guard and bounds on the feedforward wrench (``contact_guard.py``).
+        target_filter: EMA of the target pose (``target_filter.py``; off but in the
+            authors' presets, as are the three below: ``optional_stages.py``).
+        observer: Wrench observer with the low-pass after the solve, replacing the estimator
+            when enabled (``wrench_observer.py``).
+        payload: Scalar payload model along TCP z, whose output is then the feedforward
+            instead of the internal model's (``payload_model.py``).
+        joint_limits: Joint-limit repulsion (``joint_limits.py``).
     """
 
     dt_s: float = 0.001
@@ -56,6 +68,10 @@ class ControllerConfig:
     internal_model: InternalModelConfig = field(default_factory=InternalModelConfig)
     limits: LimitsConfig = field(default_factory=LimitsConfig)
     guard: ContactGuardConfig = field(default_factory=ContactGuardConfig)
+    target_filter: TargetFilterConfig = field(default_factory=TargetFilterConfig)
+    observer: WrenchObserverConfig = field(default_factory=WrenchObserverConfig)
+    payload: PayloadModelConfig = field(default_factory=PayloadModelConfig)
+    joint_limits: JointLimitConfig = field(default_factory=JointLimitConfig)
 
     def __post_init__(self) -> None:
         check_positive("dt_s", self.dt_s)
@@ -68,6 +84,10 @@ class ControllerConfig:
             raise InvalidArgumentError(
                 f"invalid dt_s {self.dt_s!r}; valid: dt_s * max(eta, K_O) < 1 (max rate {fastest})"
             )
+        if self.observer.enabled and self.estimator.kind != "residual":
+            raise InvalidArgumentError(
+                f"invalid estimator.kind {self.estimator.kind!r} with observer.enabled (the "
+                "observer takes the residual estimator's place); valid: 'residual'")
         if self.limits.rate_limiter == "libfranka" and self.dt_s != LIBFRANKA_DELTA_T_S:
             raise InvalidArgumentError(
                 f"invalid dt_s {self.dt_s!r} with limits.rate_limiter='libfranka'; valid: "

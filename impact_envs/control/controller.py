@@ -28,8 +28,10 @@ from impact_envs.control.kernel_layout import (
 )
 from impact_envs.control.lie import invalid_quaternion
 from impact_envs.control.limits import TorqueLimiter
+from impact_envs.control.optional_stages import OptionalStages
 from impact_envs.control.signals import ControllerSignals
 from impact_envs.control.slow_filter import SlowWrenchFilter
+from impact_envs.control.validation import checked_gripper_command
 from impact_envs.errors import InvalidArgumentError, SimulationError, check_choice
 
 __all__ = ["INPUT_ABS_MAX", "MODES", "ArmDynamics", "ControllerSignals", "ImpactController",
@@ -131,12 +133,16 @@ class ImpactController:
         self.limiter = TorqueLimiter(cfg.limits, cfg.dt_s)
         self.guard = ContactGuard(cfg.guard, cfg.dt_s,
                                   min(cfg.impedance.stiffness_translational_n_per_m))
+        self.optional = OptionalStages(cfg.target_filter, cfg.observer, cfg.payload,
+                                       cfg.joint_limits, cfg.dt_s)
         # Signal arrays alias the stages' output buffers (all written in place every tick).
         w_pred = self.internal_model.wrench_pred_world
+        w_ext = (self.optional.observer.wrench_world if cfg.observer.enabled
+                 else self.estimator.wrench_world)
         self.signals = ControllerSignals(
             pose_error=self.impedance.pose_error,
             wrench_imp_world=self.impedance.wrench_imp_world,
-            wrench_ext_world=self.estimator.wrench_world,
+            wrench_ext_world=w_ext,
             wrench_slow_world=self.slow_filter.wrench_slow_world,
             wrench_pred_world=w_pred,
             tau_cmd=self.limiter.output,
@@ -149,7 +155,8 @@ class ImpactController:
         """The controller's own state (``kernels.TickState``) and the estimator's."""
         cfg = self.config
         lam, lam_n = cfg.estimator.regularization, cfg.impedance.nullspace_pinv_damping
-        self._tick_packed = kernels.make_tick_state(lam, lam_n, self.mode == "impact")
+        self._tick_packed = kernels.make_tick_state(
+            lam, lam_n, self.mode == "impact", self.mode == "impact" and cfg.payload.enabled)
         self.tick = kernels.unpack_tick(self._tick_packed.buffer, self._tick_packed.scalars)[0]
         self.signals.wrench_cmd_world = self.tick.wrench_cmd
         self.signals.wrench_ff_world = self.tick.wrench_ff
@@ -174,6 +181,7 @@ class ImpactController:
         self.slow_filter.reset()
         self.limiter.reset()
         self.guard.reset()
+        self.optional.reset()
         if keep_internal_model:
             self.internal_model.reset_history()
         else:
@@ -191,6 +199,7 @@ class ImpactController:
         wrench_cmd_world: np.ndarray | None = None,
         learn_mask: np.ndarray | None = None,
         gripper_width_m: float = 0.0,
+        gripper_cmd: float | None = None,
     ) -> np.ndarray:
         """One 1 kHz control tick.
 
@@ -205,6 +214,9 @@ class ImpactController:
             learn_mask: Optional 6 bools; False freezes internal-model learning on that axis
                 and holds its feedforward at the value of the last tick it was unmasked.
             gripper_width_m: Finger opening [m] (0 ... 0.08), an internal-model feature.
+            gripper_cmd: The gripper command (-1 open ... +1 closed) from this tick on, read
+                by the payload model's gripper hold-off (None: the last one given; +1 after
+                ``reset``).
 
         Returns:
             Torque command (7,) [Nm] after torque-rate limiting and saturation (a new array).
@@ -218,13 +230,21 @@ class ImpactController:
         if not self._is_reset:
             raise InvalidArgumentError("invalid call order; valid: reset(q0) before compute()")
         mask = self.internal_model.mask_array(learn_mask)
+        grip = None if gripper_cmd is None else checked_gripper_command(gripper_cmd)
         args = self._kernel_args(q, dq, tau_measured, pos_target_world, quat_target_world,
                                  wrench_cmd_world, mask, gripper_width_m)
+        if grip is not None:
+            self.optional.payload.state.gripper_cmd[0] = grip
         flags = self._entry(args)(*args, self.kernel_state())
         if flags:
             self._after_tick(flags, quat_target_world, mask)
         self._fill_signals()
         return self.limiter.output.copy()
+
+    def set_gripper_command(self, gripper_cmd: float) -> None:
+        """The gripper command (-1 open ... +1 closed) for the next ticks: what the payload
+        model's gripper hold-off reads (the closed loop sets it once per policy step)."""
+        self.optional.payload.state.gripper_cmd[0] = checked_gripper_command(gripper_cmd)
 
     def _kernel_args(self, q: np.ndarray, dq: np.ndarray, tau_measured: np.ndarray,
                      pos_target_world: np.ndarray, quat_target_world: np.ndarray,
@@ -268,7 +288,8 @@ class ImpactController:
             tick=self._tick_packed,
             est=self._estimator_state, sf=self.slow_filter.packed, model32=model32,
             weights=weights, biases=biases, model=model, learner=learner,
-            guard=self.guard.packed, imp=self.impedance.packed, lim=self.limiter.packed)
+            guard=self.guard.packed, imp=self.impedance.packed, opt=self.optional.packed,
+            lim=self.limiter.packed)
 
     def state_arrays(self) -> dict[str, np.ndarray]:
         """Every array that carries this controller from one tick to the next, by name, live

@@ -14,74 +14,29 @@ libfranka.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from impact_envs.control.arm_model import ArmDynamics, dynamics_arrays
+from impact_envs.control.impedance_config import ImpedanceConfig
+from impact_envs.control.impedance_options import (
+    ImpedanceExtra,
+    clamped_nullspace,
+    extra_size,
+    gains_wrench,
+    null_clamp_on,
+    options_on,
+    unpack_impedance_extra,
+    write_impedance_options,
+)
 from impact_envs.control.kernel_layout import Packed, _next, layout_size
 from impact_envs.control.kernel_math import mat_t_vec, mat_vec, orientation_error
 from impact_envs.control.lie import invalid_quaternion
-from impact_envs.control.validation import check_len, check_positive
 
-
-@dataclass(frozen=True)
-class ImpedanceConfig:
-    """Task-space impedance, null-space posture and model compensation terms.
-
-    Attributes:
-        stiffness_translational_n_per_m: Diagonal of K for position error [N/m] (paper: 400).
-        stiffness_rotational_nm_per_rad: Diagonal of K for orientation error [Nm/rad] (paper: 30).
-        damping_translational_ns_per_m: Diagonal of D for TCP linear velocity [N s/m] (paper: 40).
-        damping_rotational_nms_per_rad: Diagonal of D for TCP angular velocity [Nm s/rad]
-            (paper: 10.95 = 2 sqrt(30)).
-        nullspace_stiffness_nm_per_rad: Joint stiffness k_n toward the posture q_null that
-            ``reset`` records [Nm/rad] (own choice: 10).
-        nullspace_damping_nms_per_rad: Joint damping d_n of the posture task [Nm s/rad];
-            ``None`` means 2 sqrt(k_n) (Franka example convention).
-        nullspace_pinv_damping: Damping of the pseudo-inverse in N = I - J^T (J^+)^T
-            [units of J]. Equal to the estimator's lambda by default so one regularized solve
-            per tick serves both.
-        compensate_gravity: Add g(q) of the controller model (the simulation has none built in).
-        compensate_coriolis: Add C(q, dq) dq (as the Franka example does).
-    """
-
-    stiffness_translational_n_per_m: tuple[float, float, float] = (400.0, 400.0, 400.0)
-    stiffness_rotational_nm_per_rad: tuple[float, float, float] = (30.0, 30.0, 30.0)
-    damping_translational_ns_per_m: tuple[float, float, float] = (40.0, 40.0, 40.0)
-    damping_rotational_nms_per_rad: tuple[float, float, float] = (10.95, 10.95, 10.95)
-    nullspace_stiffness_nm_per_rad: float = 10.0
-    nullspace_damping_nms_per_rad: float | None = None
-    nullspace_pinv_damping: float = 0.02
-    compensate_gravity: bool = True
-    compensate_coriolis: bool = True
-
-    def __post_init__(self) -> None:
-        for name in (
-            "stiffness_translational_n_per_m",
-            "stiffness_rotational_nm_per_rad",
-            "damping_translational_ns_per_m",
-            "damping_rotational_nms_per_rad",
-        ):
-            values = tuple(float(v) for v in getattr(self, name))
-            check_len(name, values, 3)
-            check_positive(name, values, allow_zero=True)
-            object.__setattr__(self, name, values)
-        k_n, d_n = self.nullspace_stiffness_nm_per_rad, self.nullspace_damping_nms_per_rad
-        check_positive("nullspace_stiffness_nm_per_rad", k_n, allow_zero=True)
-        if d_n is not None:
-            check_positive("nullspace_damping_nms_per_rad", d_n, allow_zero=True)
-        check_positive("nullspace_pinv_damping", self.nullspace_pinv_damping)
-
-    @property
-    def nullspace_damping(self) -> float:
-        """Resolved null-space damping d_n [Nm s/rad] (2 sqrt(k_n) when unset)."""
-        if self.nullspace_damping_nms_per_rad is None:
-            return 2.0 * math.sqrt(self.nullspace_stiffness_nm_per_rad)
-        return self.nullspace_damping_nms_per_rad
+__all__ = ["CartesianImpedance", "ImpedanceConfig", "ImpedanceExtra", "ImpedanceParams",
+           "ImpedanceState", "impedance_law", "make_impedance_state", "unpack_impedance"]
 
 
 # ------------------------------------------------------------------ named state and kernel
@@ -121,6 +76,9 @@ class ImpedanceState(NamedTuple):
         tau_coriolis: C dq (n,) [Nm] (zeros if disabled).
         tau_gravity: g(q) (n,) [Nm] (zeros if disabled).
         tau_no_gravity: Full command without gravity (n,) [Nm].
+        extra: The options' constants and work arrays (TCP-frame gains, error clip,
+            null-space clamp), named by ``impedance_options.unpack_impedance_extra`` on the
+            ticks that use them.
     """
 
     params: ImpedanceParams
@@ -135,6 +93,7 @@ class ImpedanceState(NamedTuple):
     tau_coriolis: np.ndarray
     tau_gravity: np.ndarray
     tau_no_gravity: np.ndarray
+    extra: np.ndarray
 
 
 class ImpedanceScalars(NamedTuple):
@@ -165,10 +124,12 @@ def unpack_impedance(buf, sc):
     tau_coriolis, o = _next(buf, o, n)
     tau_gravity, o = _next(buf, o, n)
     tau_no_gravity, o = _next(buf, o, n)
+    extra, o = _next(buf, o, extra_size(n))
     params = ImpedanceParams(stiffness, damping, sc.k_null, sc.d_null, sc.compensate_gravity,
                              sc.compensate_coriolis)
     return ImpedanceState(params, q_null, k_q_null, pose_error, twist, wrench_imp, tau_posture,
-                          wrench_null, wrench, tau_coriolis, tau_gravity, tau_no_gravity), o
+                          wrench_null, wrench, tau_coriolis, tau_gravity, tau_no_gravity,
+                          extra), o
 
 
 def make_impedance_state(config: ImpedanceConfig, n_joints: int = 7) -> Packed:
@@ -177,7 +138,11 @@ def make_impedance_state(config: ImpedanceConfig, n_joints: int = 7) -> Packed:
                           float(config.nullspace_damping), bool(config.compensate_gravity),
                           bool(config.compensate_coriolis), int(n_joints))
     packed = Packed(sc, np.zeros(layout_size(unpack_impedance, sc)))
-    params = unpack_impedance(packed.buffer, sc)[0].params
+    st = unpack_impedance(packed.buffer, sc)[0]
+    write_impedance_options(unpack_impedance_extra(st.extra, n_joints)[0],
+                            config.gains_frame, config.pose_error_clip_m,
+                            config.pose_error_clip_rad, config.nullspace_torque_max_nm)
+    params = st.params
     params.stiffness[:] = (config.stiffness_translational_n_per_m
                            + config.stiffness_rotational_nm_per_rad)
     params.damping[:] = (config.damping_translational_ns_per_m
@@ -200,18 +165,27 @@ def impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map, wrench_ff, st
     for i in range(3):
         e[i] = pos_target[i] - pos_ee[i]
     mat_vec(jac, dq, st.twist)
-    for i in range(6):
-        st.wrench_imp[i] = par.stiffness[i] * e[i] - par.damping[i] * st.twist[i]
+    if options_on(st.extra):  # TCP-frame gains and the error clip (impedance_options.py)
+        gains_wrench(rot_ee, st, unpack_impedance_extra(st.extra, q.shape[0])[0])
+    else:
+        for i in range(6):
+            st.wrench_imp[i] = par.stiffness[i] * e[i] - par.damping[i] * st.twist[i]
     for j in range(tau0.shape[0]):
         tau0[j] = q[j] * -par.k_null + st.k_q_null[j] - dq[j] * par.d_null
     mat_vec(wrench_map, tau0, st.wrench_null)
-    for i in range(6):
-        st.wrench[i] = st.wrench_imp[i] - st.wrench_null[i] + wrench_ff[i]
-    mat_t_vec(jac, st.wrench, out)
+    tau_null = tau0
+    if null_clamp_on(st.extra):
+        x = unpack_impedance_extra(st.extra, q.shape[0])[0]
+        clamped_nullspace(jac, wrench_ff, st, x, out)  # out = J^T (w_imp + w_ff)
+        tau_null = x.tau_null
+    else:
+        for i in range(6):
+            st.wrench[i] = st.wrench_imp[i] - st.wrench_null[i] + wrench_ff[i]
+        mat_t_vec(jac, st.wrench, out)
     if par.compensate_coriolis:
         mat_vec(cor, dq, st.tau_coriolis)
     for j in range(out.shape[0]):
-        out[j] += tau0[j]
+        out[j] += tau_null[j]
         if par.compensate_coriolis:
             out[j] += st.tau_coriolis[j]
         if par.compensate_gravity:
@@ -253,6 +227,7 @@ class CartesianImpedance:
         self.wrench_null_world, self.tau_coriolis = st.wrench_null, st.tau_coriolis
         self.tau_gravity, self.tau_no_gravity = st.tau_gravity, st.tau_no_gravity
         self.q_null = st.q_null
+        self.extra = unpack_impedance_extra(st.extra, n_joints)[0]  # the options' views
         self._zeros6 = np.zeros(6)
 
     def set_posture(self, q_null: np.ndarray) -> None:

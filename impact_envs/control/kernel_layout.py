@@ -46,6 +46,36 @@ Q_ABS_MAX, DQ_ABS_MAX, TAU_ABS_MAX, POS_ABS_MAX, QUAT_ABS_MAX, WRENCH_ABS_MAX, W
 )
 
 
+# ----------------------------------------------------------------------------- input check
+@njit(cache=True)
+def _over(values, bound) -> bool:
+    """Whether some element is not finite or |element| > bound (NaN fails every comparison)."""
+    for v in values:  # noqa: SIM110 (numba compiles no generator expression in any())
+        if not abs(v) <= bound:
+            return True
+    return False
+
+
+@njit(cache=True)
+def first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, gripper_width) -> int:
+    """Index into ``INPUT_ABS_MAX`` of the first input out of its bound, or -1 if all pass."""
+    if _over(q, Q_ABS_MAX):
+        return 0
+    if _over(dq, DQ_ABS_MAX):
+        return 1
+    if _over(tau_meas, TAU_ABS_MAX):
+        return 2
+    if _over(pos_target, POS_ABS_MAX):
+        return 3
+    if _over(quat_target, QUAT_ABS_MAX):
+        return 4
+    if _over(wrench_cmd, WRENCH_ABS_MAX):
+        return 5
+    if not abs(gripper_width) <= WIDTH_ABS_MAX:
+        return 6
+    return -1
+
+
 # --------------------------------------------------------------------------- buffer layouts
 @njit(cache=True)
 def _next(buf, start, size):

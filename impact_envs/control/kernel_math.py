@@ -75,6 +75,34 @@ def regularized_wrench_map(jac, damping_sq, gram, out) -> None:
             out[i, c] = s / gram[i, i]
 
 
+@njit(cache=True)
+def clamp_norm3(v, lo, norm_max) -> None:
+    """v[lo:lo + 3] *= norm_max / |v[lo:lo + 3]| when its norm exceeds ``norm_max`` (inf:
+    never)."""
+    n_sq = v[lo] * v[lo] + v[lo + 1] * v[lo + 1] + v[lo + 2] * v[lo + 2]
+    if n_sq > norm_max * norm_max:
+        s = norm_max / math.sqrt(n_sq)
+        for i in range(lo, lo + 3):
+            v[i] *= s
+
+
+@njit(cache=True)
+def rotate(rot, w, out) -> None:
+    """out = (R w[:3], R w[3:]): a wrench or twist from the frame of ``rot`` (e.g. the TCP,
+    ``rot`` = R_ee) to the world frame."""
+    for h in (0, 3):
+        for i in range(3):
+            out[h + i] = rot[i, 0] * w[h] + rot[i, 1] * w[h + 1] + rot[i, 2] * w[h + 2]
+
+
+@njit(cache=True)
+def rotate_back(rot, w, out) -> None:
+    """out = (R^T w[:3], R^T w[3:]): from the world frame to the frame of ``rot``."""
+    for h in (0, 3):
+        for i in range(3):
+            out[h + i] = rot[0, i] * w[h] + rot[1, i] * w[h + 1] + rot[2, i] * w[h + 2]
+
+
 # ----------------------------------------------------------------------------------- SO(3)
 @njit(cache=True)
 def quat_normalized(quat):

@@ -37,26 +37,33 @@ from impact_envs.control.internal_model.kernels import (
     unpack_model32,
 )
 from impact_envs.control.internal_model.learner import DIVERGED, learner_tick
+from impact_envs.control.joint_limits import joint_limit_torque
 from impact_envs.control.kernel_layout import (
     BAD_INPUT,
     BAD_QUAT,
-    DQ_ABS_MAX,
     NON_FINITE,
-    POS_ABS_MAX,
-    Q_ABS_MAX,
-    QUAT_ABS_MAX,
     STORE,
-    TAU_ABS_MAX,
     TRAIN,
-    WIDTH_ABS_MAX,
-    WRENCH_ABS_MAX,
     Packed,
     _next,
+    first_bad_input,
     layout_size,
 )
 from impact_envs.control.kernel_math import quat_normalized, regularized_wrench_map
 from impact_envs.control.limits import torque_limiter, unpack_limiter
-from impact_envs.control.slow_filter import slow_filter_update, unpack_slow_filter
+from impact_envs.control.optional_stages import (
+    joint_limits_on,
+    observer_on,
+    optional_joint_limits,
+    optional_observer,
+    optional_payload,
+    optional_target_filter,
+    target_filter_on,
+)
+from impact_envs.control.payload_model import payload_step
+from impact_envs.control.slow_filter import slow_filter_tick, unpack_slow_filter
+from impact_envs.control.target_filter import target_filter_step
+from impact_envs.control.wrench_observer import observer_update
 
 __all__ = [
     "BAD_INPUT", "BAD_QUAT", "DIVERGED", "NON_FINITE", "STORE", "TRAIN", "ControllerState",
@@ -66,35 +73,6 @@ __all__ = [
 
 
 # ------------------------------------------------------------------------------ controller
-@njit(cache=True)
-def _over(values, bound) -> bool:
-    """Whether some element is not finite or |element| > bound (NaN fails every comparison)."""
-    for v in values:  # noqa: SIM110 (numba compiles no generator expression in any())
-        if not abs(v) <= bound:
-            return True
-    return False
-
-
-@njit(cache=True)
-def first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, gripper_width) -> int:
-    """Index into ``INPUT_ABS_MAX`` of the first input out of its bound, or -1 if all pass."""
-    if _over(q, Q_ABS_MAX):
-        return 0
-    if _over(dq, DQ_ABS_MAX):
-        return 1
-    if _over(tau_meas, TAU_ABS_MAX):
-        return 2
-    if _over(pos_target, POS_ABS_MAX):
-        return 3
-    if _over(quat_target, QUAT_ABS_MAX):
-        return 4
-    if _over(wrench_cmd, WRENCH_ABS_MAX):
-        return 5
-    if not abs(gripper_width) <= WIDTH_ABS_MAX:
-        return 6
-    return -1
-
-
 class TickParams(NamedTuple):
     """The controller's own constants (``make_tick_state``).
 
@@ -102,7 +80,7 @@ class TickParams(NamedTuple):
         lambda_sq: Estimator regularization lambda^2 [units of J squared].
         lambda_null_sq: Null-space projector regularization lambda_n^2.
         maps_shared: Whether both use the same lambda (one solve serves both).
-        run_model: Whether the internal model runs (mode "impact").
+        run_model: Whether the internal model runs (mode "impact" without the payload model).
         apply_feedforward: Whether its prediction is applied as feedforward.
     """
 
@@ -127,6 +105,9 @@ class TickState(NamedTuple):
         pos_error_norm, rot_error_norm: (1,) |e_p| [m], |e_R| [rad].
         slow_rate: (1,) the slow filter's dimensionless rate.
         surprise, gate_open, learning_active: (1,) the internal model's (0 in "impedance").
+        payload_feedforward: (1,) 1 when the payload model runs and its output is the
+            feedforward (mode "impact" with ``PayloadModelConfig.enabled``; the internal model
+            is then skipped). A constant in the buffer, not a scalar: no crossing cost.
     """
 
     params: TickParams
@@ -141,6 +122,7 @@ class TickState(NamedTuple):
     surprise: np.ndarray
     gate_open: np.ndarray
     learning_active: np.ndarray
+    payload_feedforward: np.ndarray
 
 
 @njit(cache=True, inline="always")
@@ -157,16 +139,22 @@ def unpack_tick(buf, params):
     surprise, o = _next(buf, o, 1)
     gate_open, o = _next(buf, o, 1)
     learning_active, o = _next(buf, o, 1)
+    payload_feedforward, o = _next(buf, o, 1)
     return TickState(params, grams.reshape((2, 6, 6)), wrench_maps.reshape((2, 6, 7)),
                      wrench_cmd, wrench_ff, wrench_extra, pos_error_norm, rot_error_norm,
-                     slow_rate, surprise, gate_open, learning_active), o
+                     slow_rate, surprise, gate_open, learning_active, payload_feedforward), o
 
 
-def make_tick_state(lambda_m: float, lambda_null_m: float, run_model: bool) -> Packed:
-    """Estimator and projector regularizations, the model on/off; packed (``unpack_tick``)."""
+def make_tick_state(lambda_m: float, lambda_null_m: float, run_model: bool,
+                    payload_feedforward: bool = False) -> Packed:
+    """Estimator and projector regularizations, the model on/off, the payload model's
+    feedforward on/off (which skips the model); packed (``unpack_tick``)."""
+    run_model = run_model and not payload_feedforward
     params = TickParams(lambda_m * lambda_m, lambda_null_m * lambda_null_m,
                         lambda_null_m == lambda_m, run_model, run_model)
-    return Packed(params, np.zeros(layout_size(unpack_tick, params)))
+    packed = Packed(params, np.zeros(layout_size(unpack_tick, params)))
+    unpack_tick(packed.buffer, params)[0].payload_feedforward[0] = float(payload_feedforward)
+    return packed
 
 
 class ControllerState(NamedTuple):
@@ -176,7 +164,9 @@ class ControllerState(NamedTuple):
     ``tick``: the controller's own (``TickState``); ``est``, ``sf``, ``guard``, ``imp``,
     ``lim``: the estimator's, slow filter's, contact guard's, impedance law's and limiter's
     states, each ``Packed`` (``unpack_*`` names them inside the kernel); ``model32``,
-    ``weights``, ``biases``, ``model``, ``learner``: the internal model's.
+    ``weights``, ``biases``, ``model``, ``learner``: the internal model's; ``opt``: the
+    optional stages' (target filter, observer, payload model, joint limits: one buffer,
+    ``optional_stages.py``).
     """
 
     tick: Packed
@@ -190,6 +180,7 @@ class ControllerState(NamedTuple):
     guard: Packed
     imp: Packed
     lim: Packed
+    opt: Packed
 
 
 @njit(cache=True)
@@ -210,20 +201,30 @@ def controller_tick(
     guard = unpack_guard(state.guard.buffer, state.guard.scalars)[0]
     imp = unpack_impedance(state.imp.buffer, state.imp.scalars)[0]
     lim = unpack_limiter(state.lim.buffer, state.lim.scalars)[0]
+    opt = state.opt.buffer  # optional stages: each named only on the ticks it runs
     model32, weights, biases, model = state.model32, state.weights, state.biases, state.model
     par, grams, wrench_maps = tick.params, tick.grams, tick.wrench_maps
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
+    pos_t, quat_t = pos_target, quat_target
+    if target_filter_on(opt):  # the target filter (off in default and paper)
+        tf = optional_target_filter(opt)
+        target_filter_step(pos_target, quat_target, dyn.pos_ee_world, dyn.rot_ee_world, tf)
+        pos_t, quat_t = tf.pos, tf.quat
     regularized_wrench_map(dyn.jacobian, par.lambda_sq, grams[0], wrench_maps[0])
     if not par.maps_shared:
         regularized_wrench_map(dyn.jacobian, par.lambda_null_sq, grams[1], wrench_maps[1])
     if est.momentum:
         momentum_update(dq, tau_meas, fric, dyn, wrench_maps[0], est.observer)
         wrench_ext = est.observer.wrench
-    else:
+    elif not observer_on(opt):
         residual_update(dq, tau_meas, fric, dyn, wrench_maps[0], est.residual)
         wrench_ext = est.residual.wrench
-    slow_rate = slow_filter_update(wrench_ext, sf)
+    else:  # the wrench observer takes the residual estimator's place (authors' presets)
+        obs = optional_observer(opt)
+        observer_update(dq, tau_meas, dyn, wrench_maps[0], obs)
+        wrench_ext = obs.wrench
+    slow_rate = slow_filter_tick(wrench_ext, dyn.rot_ee_world, sf)
     flags = 0
     m = unpack_model(model)[0]
     m32 = unpack_model32(model32, int(m.n_features[0]))
@@ -231,21 +232,38 @@ def controller_tick(
     if par.run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, m32, m)
         model_predict(m32, weights, biases, m)
-        contact_guard_step(pred, dyn.pos_ee_world, pos_target, sf.wrench_slow, mask,
-                           guard)
+        contact_guard_step(pred, dyn.pos_ee_world, pos_t, sf.wrench_slow, mask, guard)
         target = guard.target  # w_slow; force axes held by the guard replaced
         flags = model_gate_step(target, slow_rate, mask, m)
         flags = learner_tick(flags, target, mask, m32, m, weights, biases, state.learner)
-    _feedforward(pred, wrench_cmd, mask, guard, tick)  # w_ff, w_ff + w_cmd
+    if tick.payload_feedforward[0] != 0.0:
+        pay = optional_payload(opt)
+        payload_step(wrench_ext, sf.wrench_slow, dyn.rot_ee_world, pay)
+        _add_command(pay.wrench_ff, wrench_cmd, tick)
+    else:
+        _feedforward(pred, wrench_cmd, mask, guard, tick)  # w_ff, w_ff + w_cmd
     wrench_map_null = wrench_maps[0] if par.maps_shared else wrench_maps[1]
-    impedance_law(dyn, q, dq, pos_target, quat_target, wrench_map_null, tick.wrench_extra,
-                  imp)
+    impedance_law(dyn, q, dq, pos_t, quat_t, wrench_map_null, tick.wrench_extra, imp)
+    if joint_limits_on(opt):  # joint-limit repulsion, added as it is
+        jl = optional_joint_limits(opt)
+        joint_limit_torque(q, jl)
+        for j in range(imp.tau_no_gravity.shape[0]):
+            imp.tau_no_gravity[j] += jl.tau[j]
     torque_limiter(imp.tau_no_gravity, imp.tau_gravity, lim)
     _fill_scalars(imp.pose_error, slow_rate, m, par.run_model, tick)
     for v in lim.output:
         if not math.isfinite(v):
             flags |= NON_FINITE
     return flags
+
+
+@njit(cache=True, inline="always")
+def _add_command(w_ff, wrench_cmd, tick) -> None:
+    """The payload model's feedforward ``w_ff`` as the tick's w_ff, and w_ff + w_cmd."""
+    for i in range(6):
+        tick.wrench_cmd[i] = wrench_cmd[i]
+        tick.wrench_ff[i] = w_ff[i]
+        tick.wrench_extra[i] = w_ff[i] + wrench_cmd[i]
 
 
 @njit(cache=True, inline="always")

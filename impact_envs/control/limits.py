@@ -20,7 +20,7 @@ from numba import njit
 
 from impact_envs.control.kernel_layout import Packed, _next, layout_size
 from impact_envs.control.validation import check_len, check_positive
-from impact_envs.errors import check_choice
+from impact_envs.errors import InvalidArgumentError, check_choice
 
 LIBFRANKA_DELTA_T_S = 1e-3
 """libfranka's ``kDeltaT`` [s]: the period its ``limitRate`` divides and multiplies by."""
@@ -44,11 +44,17 @@ class LimitsConfig:
         rate_limiter: ``"libfranka"`` (default): libfranka's ``limitRate`` operation for
             operation (requires the controller's dt_s = 1 ms, libfranka's ``kDeltaT``);
             ``"per_tick_clip"``: last + clip(cmd - last, +-rate * dt), any dt.
+        rate_limit_includes_gravity: Rate-limit the whole command, gravity included, against
+            the previous rate-limited command (the authors' simulation, whose controller
+            compensates gravity itself: ``authors_sim``); False (default): the command
+            without gravity, as libfranka and the robot's ``tau_J_d``. Only with
+            ``"per_tick_clip"``.
     """
 
     torque_max_nm: tuple[float, ...] = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
     torque_rate_max_nm_per_s: float = LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S
     rate_limiter: str = "libfranka"
+    rate_limit_includes_gravity: bool = False
 
     def __post_init__(self) -> None:
         values = tuple(float(v) for v in self.torque_max_nm)
@@ -57,6 +63,11 @@ class LimitsConfig:
         object.__setattr__(self, "torque_max_nm", values)
         check_positive("torque_rate_max_nm_per_s", self.torque_rate_max_nm_per_s)
         check_choice("limits.rate_limiter", self.rate_limiter, RATE_LIMITERS)
+        if self.rate_limit_includes_gravity and self.rate_limiter != "per_tick_clip":
+            raise InvalidArgumentError(
+                "invalid limits.rate_limit_includes_gravity True with rate_limiter "
+                f"{self.rate_limiter!r}; valid: rate_limiter='per_tick_clip' (libfranka limits "
+                "the command without gravity)")
 
 
 def libfranka_limits() -> LimitsConfig:
@@ -104,11 +115,37 @@ class LimiterState(NamedTuple):
         last_no_gravity: The previous output minus gravity (n,) [Nm]: what the rate bound is
             measured from (libfranka's last ``tau_J_d``).
         output: The command of the last tick (n,) [Nm].
+        extra: (1 + n,) ``GravityRate`` (``unpack_gravity_rate``): the rate limit on the
+            command with gravity, named on the ticks that use it.
     """
 
     params: LimiterParams
     last_no_gravity: np.ndarray
     output: np.ndarray
+    extra: np.ndarray
+
+
+class GravityRate(NamedTuple):
+    """The rate limit on the command with gravity (``rate_limit_includes_gravity``), views of
+    ``LimiterState.extra``: a flag in the buffer rather than a scalar, so that the limiter
+    crosses into numba as cheaply as before it existed.
+
+    Attributes:
+        on: (1,) 1 when the per-tick clip acts on the command with gravity.
+        last_with_gravity: (n,) the previous rate-limited command, gravity included, before
+            saturation [Nm] (the authors' ``tau_previous``; 0 after ``reset``).
+    """
+
+    on: np.ndarray
+    last_with_gravity: np.ndarray
+
+
+@njit(cache=True, inline="always")
+def unpack_gravity_rate(ext, n_joints):
+    """``GravityRate`` as named views of ``ext`` (its flag is slot 0)."""
+    on, o = _next(ext, 0, 1)
+    last, o = _next(ext, o, n_joints)
+    return GravityRate(on, last)
 
 
 class LimiterScalars(NamedTuple):
@@ -127,8 +164,9 @@ def unpack_limiter(buf, sc):
     tau_max, o = _next(buf, 0, n)
     last, o = _next(buf, o, n)
     out, o = _next(buf, o, n)
+    extra, o = _next(buf, o, 1 + n)
     params = LimiterParams(sc.max_delta_nm, sc.libfranka, sc.max_rate_nm_per_s, tau_max)
-    return LimiterState(params, last, out), o
+    return LimiterState(params, last, out, extra), o
 
 
 def make_limiter_state(config: LimitsConfig, dt_s: float) -> Packed:
@@ -137,7 +175,9 @@ def make_limiter_state(config: LimitsConfig, dt_s: float) -> Packed:
                         config.rate_limiter == "libfranka",
                         float(config.torque_rate_max_nm_per_s), len(config.torque_max_nm))
     packed = Packed(sc, np.zeros(layout_size(unpack_limiter, sc)))
-    unpack_limiter(packed.buffer, sc)[0].params.tau_max[:] = config.torque_max_nm
+    st = unpack_limiter(packed.buffer, sc)[0]
+    st.params.tau_max[:] = config.torque_max_nm
+    unpack_gravity_rate(st.extra, sc.n_joints).on[0] = config.rate_limit_includes_gravity
     return packed
 
 
@@ -173,10 +213,33 @@ def saturate_kernel(tau, tau_max, out) -> None:
         out[j] = v
 
 
+@njit(cache=True)  # out of line: the tick's default path stays as small as before
+def _limit_with_gravity(tau_no_gravity, tau_gravity, st) -> None:
+    """Per-tick clip of the whole command (gravity included) against the previous
+    rate-limited command, then saturation (the authors' simulation)."""
+    par, out = st.params, st.output
+    last = unpack_gravity_rate(st.extra, out.shape[0]).last_with_gravity
+    for j in range(out.shape[0]):
+        d = tau_no_gravity[j] + tau_gravity[j] - last[j]
+        if d > par.max_delta_nm:
+            d = par.max_delta_nm
+        if d < -par.max_delta_nm:
+            d = -par.max_delta_nm
+        last[j] += d
+        out[j] = last[j]
+    saturate_kernel(out, par.tau_max, out)
+    for j in range(out.shape[0]):
+        st.last_no_gravity[j] = out[j] - tau_gravity[j]
+
+
 @njit(cache=True, inline="always")
 def torque_limiter(tau_no_gravity, tau_gravity, st) -> None:
-    """Rate-limit without gravity, add gravity, saturate; remember output - gravity."""
+    """Rate-limit without gravity, add gravity, saturate; remember output - gravity.
+    With ``with_gravity``: ``_limit_with_gravity`` instead."""
     par, last, out = st.params, st.last_no_gravity, st.output
+    if st.extra[0] != 0.0:  # GravityRate.on: the rate limit on the command with gravity
+        _limit_with_gravity(tau_no_gravity, tau_gravity, st)
+        return
     if par.libfranka:
         limit_rate_libfranka_kernel(tau_no_gravity, last, par.max_rate_nm_per_s, out)
     else:
@@ -209,13 +272,17 @@ class TorqueLimiter:
         self.state = st = unpack_limiter(self.packed.buffer, self.packed.scalars)[0]
         self.tau_max, self.output = st.params.tau_max, st.output
         self.max_delta_nm = st.params.max_delta_nm
+        self.gravity_rate = unpack_gravity_rate(st.extra, len(config.torque_max_nm))
 
     def reset(self, tau_no_gravity: np.ndarray | None = None) -> None:
-        """Set the previously commanded torque without gravity (default 0) [Nm]."""
+        """Set the previously commanded torque without gravity (default 0) [Nm]; the previous
+        command with gravity (``rate_limit_includes_gravity``) is set to 0, as the authors'
+        controller starts."""
         if tau_no_gravity is None:
             self.state.last_no_gravity.fill(0.0)
         else:
             self.state.last_no_gravity[:] = tau_no_gravity
+        self.gravity_rate.last_with_gravity.fill(0.0)
 
     def apply(self, tau_no_gravity: np.ndarray, tau_gravity: np.ndarray) -> np.ndarray:
         """Rate-limit ``tau_no_gravity``, add ``tau_gravity``, saturate.

@@ -24,10 +24,11 @@ from impact_envs.errors import InvalidArgumentError
 _TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off")
 
 
-def _parse_value(key: str, text: str, default: object) -> object:
-    """``text`` converted to the type of ``default``."""
+def _parse_value(key: str, text: str, default: object, optional: bool = False) -> object:
+    """``text`` converted to the type of ``default``; ``none`` is None where the field is
+    optional (``float | None``) whatever its current value."""
     try:
-        if default is None:
+        if default is None or (optional and text.lower() == "none"):
             return None if text.lower() == "none" else float(text)
         if isinstance(default, bool):
             if text.lower() not in _TRUE + _FALSE:
@@ -68,12 +69,14 @@ def apply_overrides(config: ControllerConfig, items: Sequence[str]) -> Controlle
                 f"unknown controller config section {section!r}; valid: {sorted(sections)}"
             )
         part = getattr(config, section)
-        names = [f.name for f in dataclasses.fields(part)]
-        if name not in names:
+        fields = {f.name: f for f in dataclasses.fields(part)}
+        if name not in fields:
             raise InvalidArgumentError(
-                f"unknown field {name!r} of controller config section {section!r}; valid: {names}"
+                f"unknown field {name!r} of controller config section {section!r}; "
+                f"valid: {list(fields)}"
             )
-        value = _parse_value(f"{section}.{name}", text, getattr(part, name))
+        optional = "None" in str(fields[name].type)
+        value = _parse_value(f"{section}.{name}", text, getattr(part, name), optional)
         part = dataclasses.replace(part, **{name: value})
         config = dataclasses.replace(config, **{section: part})
     return config

@@ -1,4 +1,6 @@
-"""Named controller presets: ``"default"`` (the shipped configuration) and ``"paper"``.
+"""Named controller presets: ``"default"`` (the shipped configuration), ``"paper"``, and the
+authors' released controller as it runs in their simulation (``"authors_sim"``) and on their
+robot (``"authors_real"``; ``authors_presets.py``).
 
 ``paper`` is the literal reading of the IMPACT paper's hyper-parameter table, exactly the
 defaults this project shipped until 2026-11-24 (every field equal, bit for bit).
@@ -16,12 +18,16 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from impact_envs.control.authors_presets import AUTHORS_PRESETS, SIM_ONLY, authors_config
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.overrides import apply_overrides
-from impact_envs.errors import check_choice
+from impact_envs.errors import InvalidArgumentError, check_choice
 
-PRESETS: tuple[str, ...] = ("default", "paper")
+PRESETS: tuple[str, ...] = ("default", "paper", *AUTHORS_PRESETS)
 """Valid preset names."""
+ROBOT_PRESETS: tuple[str, ...] = tuple(name for name in PRESETS if name not in SIM_ONLY)
+"""The presets that may run on a real FR3 (``impact-robot --preset``): all but
+``SIM_ONLY``'s."""
 
 DEPARTURES: dict[str, str] = {
     "internal_model.slow_rate_max": "0.2",
@@ -42,6 +48,12 @@ def preset_config(name: str, estimator: str | None = None) -> ControllerConfig:
     estimator of kind ``estimator`` (``ESTIMATOR_KINDS``: "residual", the presets', or
     "momentum") when given."""
     check_choice("controller preset", name, PRESETS)
+    if name in AUTHORS_PRESETS:
+        if estimator is not None:
+            raise InvalidArgumentError(
+                f"invalid estimator {estimator!r} with preset {name!r} (it runs the authors' "
+                "observer); valid: an estimator with preset default or paper")
+        return authors_config(robot=name == "authors_real")
     config = ControllerConfig()
     if name != "default":
         config = revert_departures(config, DEPARTURES)
@@ -63,3 +75,13 @@ def preset_name(config: ControllerConfig) -> str:
         if preset_config(name) == config:
             return name
     return "custom"
+
+
+def check_robot_preset(name: str) -> str:
+    """``name`` if it is one of ``ROBOT_PRESETS``, else a one-line ``InvalidArgumentError``
+    (naming why a simulation-only preset may not run on a robot)."""
+    if name in SIM_ONLY:
+        raise InvalidArgumentError(f"invalid preset {name!r} on a robot: {SIM_ONLY[name]}; "
+                                   f"valid: {', '.join(ROBOT_PRESETS)}")
+    check_choice("preset", name, ROBOT_PRESETS)
+    return name

@@ -7,6 +7,11 @@ torque 1.0), so per 1 ms tick the gain is eta * dt:
 
 For a step of size A > c on one axis this is a ramp at the maximum slew eta * c (20 N/s for
 force) until the gap reaches c, then an exponential with time constant ~1/eta (0.5 s force).
+
+Options off in ``default`` and ``paper`` (the authors' released controller uses them,
+``authors_sim`` / ``authors_real``; ``slow_filter_tick`` runs the plain update above when all
+are off): the filter in the TCP frame (per-axis clip on TCP axes), then a leak
+w_slow *= max(0, 1 - leak dt), then norm clamps on its force and torque parts.
 """
 
 from __future__ import annotations
@@ -19,7 +24,17 @@ import numpy as np
 from numba import njit
 
 from impact_envs.control.kernel_layout import Packed, _next, layout_size
-from impact_envs.control.validation import check_positive
+from impact_envs.control.slow_filter_options import (
+    EXTRA_SIZE,
+    options_on,
+    unpack_slow_filter_extra,
+    update_with_options,
+    write_slow_filter_options,
+)
+from impact_envs.control.validation import FRAMES, check_optional_positive, check_positive
+from impact_envs.errors import InvalidArgumentError, check_choice
+
+_EYE3 = np.eye(3)
 
 
 @dataclass(frozen=True)
@@ -32,18 +47,40 @@ class SlowWrenchConfig:
         rate_torque_per_s: eta of the torque axes [1/s] (paper: 1.0).
         clip_force_n: Per-axis clip of (w_ext - w_slow) on force axes [N] (paper: 10).
         clip_torque_nm: Per-axis clip on torque axes [Nm] (paper: 1).
+        frame: ``"world"`` (default) or ``"tcp"``: the frame w_slow is kept and clipped in
+            (the authors' controller works in the TCP frame, ``use_local_jacobian``);
+            ``wrench_slow`` is reported in the world frame either way.
+        leak_per_s: Leak rate [1/s]: w_slow *= max(0, 1 - leak dt) after each update
+            (0: none; the authors: 0.01).
+        force_norm_max_n: Bound on |w_slow force| [N] after the leak (None: none; the
+            authors: 120 in simulation, 50 on the robot).
+        torque_norm_max_nm: Bound on |w_slow torque| [Nm] (None: none; 50 / 8).
     """
 
     rate_force_per_s: float = 20.0
     rate_torque_per_s: float = 1.0
     clip_force_n: float = 10.0
     clip_torque_nm: float = 1.0
+    frame: str = "world"
+    leak_per_s: float = 0.0
+    force_norm_max_n: float | None = None
+    torque_norm_max_nm: float | None = None
 
     def __post_init__(self) -> None:
         check_positive("rate_force_per_s", self.rate_force_per_s)
         check_positive("rate_torque_per_s", self.rate_torque_per_s)
         check_positive("clip_force_n", self.clip_force_n)
         check_positive("clip_torque_nm", self.clip_torque_nm)
+        check_choice("slow_wrench.frame", self.frame, FRAMES)
+        check_positive("leak_per_s", self.leak_per_s, allow_zero=True)
+        check_optional_positive("force_norm_max_n", self.force_norm_max_n)
+        check_optional_positive("torque_norm_max_nm", self.torque_norm_max_nm)
+
+    @property
+    def options_on(self) -> bool:
+        """Whether any option beyond the paper's filter is on (TCP frame, leak, clamps)."""
+        return (self.frame != "world" or self.leak_per_s > 0.0
+                or self.force_norm_max_n is not None or self.torque_norm_max_nm is not None)
 
     @property
     def max_force_slew_n_per_s(self) -> float:
@@ -74,14 +111,18 @@ class SlowFilterState(NamedTuple):
     Attributes:
         params: ``SlowFilterParams``.
         wrench_slow: w_slow (6,) [N, Nm], world frame.
-        rate: dw_slow/dt of the last update (6,) [N/s, Nm/s].
+        rate: dw_slow/dt of the last update before leak and clamps (6,) [N/s, Nm/s], in the
+            filter's frame.
         slow_rate: (1,) the dimensionless slow-wrench rate of the last update.
+        extra: The options' constants and arrays (frame, leak, clamps), named by
+            ``slow_filter_options.unpack_slow_filter_extra`` on the ticks that use them.
     """
 
     params: SlowFilterParams
     wrench_slow: np.ndarray
     rate: np.ndarray
     slow_rate: np.ndarray
+    extra: np.ndarray
 
 
 class SlowFilterScalars(NamedTuple):
@@ -99,8 +140,9 @@ def unpack_slow_filter(buf, sc):
     wrench_slow, o = _next(buf, o, 6)
     rate, o = _next(buf, o, 6)
     slow_rate, o = _next(buf, o, 1)
+    extra, o = _next(buf, o, EXTRA_SIZE)
     params = SlowFilterParams(eta, gain, clip, sc.inv_max_force_slew)
-    return SlowFilterState(params, wrench_slow, rate, slow_rate), o
+    return SlowFilterState(params, wrench_slow, rate, slow_rate, extra), o
 
 
 def make_slow_filter_state(config: SlowWrenchConfig, dt_s: float) -> Packed:
@@ -109,7 +151,11 @@ def make_slow_filter_state(config: SlowWrenchConfig, dt_s: float) -> Packed:
     cf, ct = config.clip_force_n, config.clip_torque_nm
     sc = SlowFilterScalars(1.0 / config.max_force_slew_n_per_s)
     packed = Packed(sc, np.zeros(layout_size(unpack_slow_filter, sc)))
-    params = unpack_slow_filter(packed.buffer, sc)[0].params
+    st = unpack_slow_filter(packed.buffer, sc)[0]
+    write_slow_filter_options(unpack_slow_filter_extra(st.extra), config.options_on,
+                              config.frame == "tcp", config.leak_per_s * dt_s,
+                              config.force_norm_max_n, config.torque_norm_max_nm)
+    params = st.params
     params.eta_per_s[:] = (f, f, f, t, t, t)
     params.gain[:] = params.eta_per_s * dt_s
     params.clip[:] = (cf, cf, cf, ct, ct, ct)
@@ -133,6 +179,16 @@ def slow_filter_update(wrench_ext, st) -> float:
     return st.slow_rate[0]
 
 
+@njit(cache=True, inline="always")
+def slow_filter_tick(wrench_ext, rot_ee, st) -> float:
+    """One tick of the filter: ``slow_filter_update`` when no option is on, else the update
+    in the filter's frame (``rot_ee``: the TCP's rotation, world from TCP) with leak and
+    clamps. Returns the slow rate."""
+    if options_on(st.extra):
+        return update_with_options(wrench_ext, rot_ee, st, unpack_slow_filter_extra(st.extra))
+    return slow_filter_update(wrench_ext, st)
+
+
 class SlowWrenchFilter:
     """Per-axis clipped low-pass and slow-wrench rate: ``state`` (``SlowFilterState``) and
     ``update`` over the kernel ``slow_filter_update``.
@@ -153,6 +209,8 @@ class SlowWrenchFilter:
         self.state = st = unpack_slow_filter(self.packed.buffer, self.packed.scalars)[0]
         self.eta_per_s, self.gain, self.clip = st.params[:3]
         self.wrench_slow_world, self.rate_world = st.wrench_slow, st.rate
+        self.extra = unpack_slow_filter_extra(st.extra)  # the options' views
+        self.wrench_slow_kept = self.extra.wrench_kept
 
     @property
     def slow_rate(self) -> float:
@@ -167,11 +225,20 @@ class SlowWrenchFilter:
             self.wrench_slow_world[:] = wrench_slow_world
         self.rate_world.fill(0.0)
         self.state.slow_rate[0] = 0.0
+        self.wrench_slow_kept.fill(0.0)  # the TCP-frame copy (frame="tcp": starts from 0)
 
-    def update(self, wrench_ext_world: np.ndarray) -> np.ndarray:
-        """Advance one tick toward ``wrench_ext_world`` (6,) and return w_slow (6,)."""
+    def update(self, wrench_ext_world: np.ndarray,
+               rot_ee_world: np.ndarray | None = None) -> np.ndarray:
+        """Advance one tick toward ``wrench_ext_world`` (6,) and return w_slow (6,), world
+        frame; ``rot_ee_world`` (3, 3), the TCP's rotation, is needed with ``frame="tcp"``."""
         w_ext = np.asarray(wrench_ext_world, dtype=np.float64)
-        slow_filter_update(w_ext, self.state)
+        if rot_ee_world is None:
+            if self.extra.tcp_frame[0] != 0.0:
+                raise InvalidArgumentError(
+                    "invalid rot_ee_world None; valid: the TCP rotation (3, 3) with frame='tcp'")
+            rot_ee_world = _EYE3
+        slow_filter_tick(w_ext, np.ascontiguousarray(rot_ee_world, dtype=np.float64),
+                         self.state)
         return self.wrench_slow_world
 
 

@@ -96,6 +96,7 @@ class ClosedLoop:
         sim, ctrl = self.sim, self.controller
         n = targets.positions.shape[0]
         cmd, mask = ctrl.loop_inputs(targets.wrench_cmd, targets.learn_mask)
+        ctrl.set_gripper_command(targets.gripper_cmd)  # the payload model's hold-off reads it
         plan = StepPlan(targets.noise, targets.positions, targets.quats, np.empty((n, 7)),
                         np.empty((n, 7)), np.empty(21), float(targets.gripper_cmd), cmd, mask,
                         self._fric_model)
@@ -148,7 +149,7 @@ def control_tick(
     from ``rng``."""
     q, dq, tau_meas = sim.read_sensors(rng)
     tau = controller.compute(q, dq, tau_meas, pos_target_world, quat_target_world,
-                             gripper_width_m=sim.gripper_width())
+                             gripper_width_m=sim.gripper_width(), gripper_cmd=gripper_cmd)
     sim.apply(tau, gripper_cmd)
     sim.step()
     return q, dq

@@ -144,3 +144,43 @@ def test_libfranka_rate_limiter_needs_a_1khz_controller() -> None:
         ControllerConfig(dt_s=0.002, limits=libfranka_limits())
     with pytest.raises(InvalidArgumentError, match="per_tick_clip"):
         LimitsConfig(rate_limiter="franka")
+
+
+AUTHORS_SIM = LimitsConfig(torque_rate_max_nm_per_s=500.0, rate_limiter="per_tick_clip",
+                           rate_limit_includes_gravity=True)
+"""The authors' simulation: 0.5 Nm per 1 ms tick on the command with gravity."""
+
+
+def test_rate_limit_of_0_5_nm_per_tick_with_gravity() -> None:
+    """After reset the previous command is 0: a gravity torque of (10, -3, 0.2, 0, ...) Nm
+    with nothing else is reached at 0.5 Nm per tick (20 ticks, 6 ticks, at once); without
+    gravity in the bound (authors_real, libfranka) it passes at once."""
+    limiter = TorqueLimiter(AUTHORS_SIM, dt_s=0.001)
+    gravity = np.array([10.0, -3.0, 0.2, 0.0, 0.0, 0.0, 0.0])
+    history = np.array([limiter.apply(np.zeros(7), gravity).copy() for _ in range(25)])
+    np.testing.assert_allclose(history[:, 0], np.minimum(0.5 * np.arange(1, 26), 10.0))
+    np.testing.assert_allclose(history[:, 1], np.maximum(-0.5 * np.arange(1, 26), -3.0))
+    np.testing.assert_allclose(history[:, 2], 0.2)
+    real = TorqueLimiter(LimitsConfig(torque_rate_max_nm_per_s=500.0,
+                                      rate_limiter="per_tick_clip"), dt_s=0.001)
+    np.testing.assert_allclose(real.apply(np.full(7, 2.0), gravity), gravity + 0.5)
+
+
+def test_rate_limit_with_gravity_measures_from_the_unsaturated_command() -> None:
+    """The authors keep the rate-limited command (no saturation in their controller; the
+    actuators clip): 20 Nm requested on a 12 Nm wrist joint, then 0: the output leaves 12 Nm
+    only once the remembered command, 20 - 0.5 k, is below it."""
+    limiter = TorqueLimiter(AUTHORS_SIM, dt_s=0.001)
+    limiter.gravity_rate.last_with_gravity[:] = 20.0
+    out = limiter.apply(np.zeros(7), np.zeros(7))
+    assert out[4] == 12.0 and limiter.gravity_rate.last_with_gravity[4] == 19.5
+    for _ in range(16):
+        out = limiter.apply(np.zeros(7), np.zeros(7))
+    assert out[4] == 11.5  # 20 - 0.5 x 17
+    limiter.reset()
+    assert not limiter.gravity_rate.last_with_gravity.any()
+
+
+def test_rate_limit_with_gravity_needs_the_per_tick_clip() -> None:
+    with pytest.raises(InvalidArgumentError, match="valid: rate_limiter='per_tick_clip'"):
+        LimitsConfig(rate_limit_includes_gravity=True)

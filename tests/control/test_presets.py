@@ -60,7 +60,7 @@ def test_preset_names_and_errors() -> None:
 
 
 def test_estimator_kind_is_chosen_on_the_preset() -> None:
-    for name in PRESETS:
+    for name in ("default", "paper"):  # the authors' presets run their own observer
         assert preset_config(name, estimator="residual") == preset_config(name)
         momentum = preset_config(name, estimator="momentum")
         assert momentum.estimator.kind == "momentum" and preset_name(momentum) == "custom"

@@ -82,3 +82,60 @@ def test_config_validation() -> None:
         SlowWrenchConfig(clip_force_n=0.0)
     with pytest.raises(InvalidArgumentError):
         ControllerConfig(dt_s=1.0)  # eta * dt >= 1 would overshoot
+
+
+def test_leak_multiplies_by_1_minus_0_01_dt_after_each_update() -> None:
+    """From w_slow = 5 N toward 0 (gap inside the clip): w_k = 5 ((1 - eta dt)(1 - leak dt))^k."""
+    cfg = SlowWrenchConfig(rate_force_per_s=2.0, leak_per_s=0.01)
+    filt = SlowWrenchFilter(cfg, DT)
+    filt.reset(np.array([5.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    traj = _run(filt, np.zeros(6), 1000)[:, 0]
+    k = np.arange(1, 1001)
+    np.testing.assert_allclose(traj, 5.0 * ((1 - 2.0 * DT) * (1 - 0.01 * DT)) ** k, rtol=1e-12)
+    held = SlowWrenchFilter(SlowWrenchConfig(leak_per_s=0.01), DT)
+    held.reset(np.array([0.0, 0.0, 40.0, 0.0, 0.0, 0.0]))  # a steady 40 N load
+    out = _run(held, np.array([0.0, 0.0, 40.0, 0.0, 0.0, 0.0]), 20000)[-1, 2]
+    assert out == pytest.approx(40.0 * 20.0 / (20.0 + 0.01), rel=1e-6)  # the leak's bias
+
+
+def test_norm_clamps_bound_force_and_torque_of_w_slow() -> None:
+    cfg = SlowWrenchConfig(force_norm_max_n=120.0, torque_norm_max_nm=50.0)
+    filt = SlowWrenchFilter(cfg, DT)
+    big = np.array([300.0, 0.0, 400.0, 60.0, 80.0, 0.0])  # |f| 500 N, |m| 100 Nm
+    traj = _run(filt, big, 3000)  # the force ramps at 200 N/s per axis into the bound
+    assert np.linalg.norm(traj[-1, :3]) == pytest.approx(120.0, rel=1e-12)
+    assert np.max(np.linalg.norm(traj[:, :3], axis=1)) <= 120.0 * (1 + 1e-12)
+    filt.reset(big)  # from beyond both bounds: clamped on the first tick, direction kept
+    out = filt.update(big)
+    np.testing.assert_allclose(out, [72.0, 0.0, 96.0, 30.0, 40.0, 0.0], rtol=1e-12)
+
+
+def test_tcp_frame_clips_on_tcp_axes_and_reports_the_world_wrench() -> None:
+    """A TCP turned 90 deg about world z: a 30 N step along world x is a step along TCP -y
+    (x_world = -y_tcp), clipped there at 10 N: w_slow's first tick is 10 x 0.02 along world x."""
+    rot = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    filt = SlowWrenchFilter(SlowWrenchConfig(frame="tcp"), DT)
+    out = filt.update(np.array([30.0, 0.0, 0.0, 0.0, 0.0, 0.0]), rot)
+    np.testing.assert_allclose(out, [0.2, 0.0, 0.0, 0.0, 0.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(filt.wrench_slow_kept, [0.0, -0.2, 0.0, 0.0, 0.0, 0.0],
+                               atol=1e-15)
+    with pytest.raises(InvalidArgumentError, match="valid: the TCP rotation"):
+        filt.update(np.zeros(6))
+    with pytest.raises(InvalidArgumentError, match="valid choices: world, tcp"):
+        SlowWrenchConfig(frame="base")
+
+
+def test_the_options_layout_and_flag_slot_agree() -> None:
+    from impact_envs.control.slow_filter_options import (
+        EXTRA_SIZE,
+        options_on,
+        unpack_slow_filter_extra,
+    )
+
+    ext = np.zeros(EXTRA_SIZE)
+    x = unpack_slow_filter_extra(ext)
+    assert x.wrench_in.base is not None and sum(v.shape[0] for v in x) == EXTRA_SIZE
+    x.on[0] = 1.0
+    assert options_on(ext)
+    assert not options_on(SlowWrenchFilter(SlowWrenchConfig(), DT).state.extra)
+    assert options_on(SlowWrenchFilter(SlowWrenchConfig(leak_per_s=0.01), DT).state.extra)

@@ -30,7 +30,8 @@ class _ReferenceLoop:
                 self.hook(sim, float(sim.data.time))
             q, dq, tau_meas = sim.read_sensors(None, targets.noise[i])
             tau = ctrl.compute(q, dq, tau_meas, targets.positions[i], targets.quats[i],
-                               targets.wrench_cmd, targets.learn_mask, sim.gripper_width())
+                               targets.wrench_cmd, targets.learn_mask, sim.gripper_width(),
+                               gripper_cmd=targets.gripper_cmd)
             sim.apply(tau, targets.gripper_cmd)
             sim.step()
             taus[i], qvels[i] = sim.tau_applied, sim.arm_state()[1]
@@ -51,6 +52,19 @@ def test_closed_loop_equals_public_api_ticks(env_id):
         if reference:
             env.unwrapped.loop = _ReferenceLoop(env.unwrapped.loop)
         runs.append(expert_rollout(env, env_id, seed=5, steps=60))
+    np.testing.assert_array_equal(runs[0], runs[1])
+
+
+@pytest.mark.parametrize("preset", ["authors_sim", "authors_real"])
+def test_closed_loop_equals_public_api_ticks_with_the_authors_presets(preset):
+    """The optional stages (target filter, observer, payload model with the gripper command,
+    joint limits, the rate limit with gravity) run the same in both, bit for bit."""
+    runs = []
+    for reference in (False, True):
+        env = gym.make("IMPACT/Hammer-v0", controller="impact", controller_preset=preset)
+        if reference:
+            env.unwrapped.loop = _ReferenceLoop(env.unwrapped.loop)
+        runs.append(expert_rollout(env, "IMPACT/Hammer-v0", seed=5, steps=60))
     np.testing.assert_array_equal(runs[0], runs[1])
 
 
