@@ -15,10 +15,12 @@ import multiprocessing as mp
 import os
 from typing import Any, NamedTuple
 
+from impact_envs.errors import InvalidArgumentError
 from impact_franka.fci import FrankaError
 
 CONNECT_TIMEOUT_S = 30.0
-"""Longest wait for the child to import pylibfranka and connect to the hand."""
+"""Default longest wait for the child to import pylibfranka and connect to the hand [s]
+(``impact-robot`` passes ``--connect-timeout-s``)."""
 
 
 class GripperCommand(NamedTuple):
@@ -82,15 +84,19 @@ class GripperProcess:
         self.max_width_m = 0.0
         self._proc: Any = None
 
-    def open(self) -> None:
+    def open(self, timeout_s: float = CONNECT_TIMEOUT_S) -> None:
         """Start the child and wait until it is connected; ``FrankaError`` (one line) if the
-        hand cannot be reached."""
+        hand cannot be reached within ``timeout_s`` (the child is then killed: pylibfranka's
+        ``Gripper(host)`` has no timeout of its own)."""
         ctx = mp.get_context("spawn")
         self._conn, child = ctx.Pipe()
         self._proc = ctx.Process(target=_child, args=(child, self.host), daemon=True)
         self._proc.start()
-        reply = self._conn.recv() if self._conn.poll(CONNECT_TIMEOUT_S) else ("error", "timeout")
+        answered = self._conn.poll(timeout_s)
+        reply = self._conn.recv() if answered else ("error", f"no answer within {timeout_s:g} s")
         if reply[0] != "ready":
+            if not answered:
+                self._proc.kill()
             self.close()
             raise FrankaError(f"cannot connect to the Franka Hand at {self.host}: {reply[1]}; "
                               "valid: the address of a gripper server (port 1338), see "
@@ -100,7 +106,8 @@ class GripperProcess:
     def send(self, command: GripperCommand) -> None:
         """Start ``command`` (the previous one must have replied)."""
         if command.kind not in ("move", "grasp"):
-            raise FrankaError(f"invalid gripper command {command.kind!r}; valid: move, grasp")
+            raise InvalidArgumentError(f"invalid gripper command {command.kind!r}; valid: move, "
+                                       "grasp")
         self._conn.send(command)
 
     def poll(self) -> GripperReply | None:

@@ -19,7 +19,8 @@ from typing import NamedTuple
 import numpy as np
 
 from impact_envs.control.lie import slerp
-from impact_franka.fci import FciReading, FrankaError
+from impact_envs.errors import InvalidArgumentError
+from impact_franka.fci import FciReading
 from impact_franka.gripper import GripperCommand, GripperProcess
 
 
@@ -80,7 +81,7 @@ class PickPlaceTarget:
 
     def __init__(self, plan: PickPlacePlan, gripper: GripperProcess) -> None:
         if plan.speed_m_per_s <= 0 or plan.lift_m < 0:
-            raise FrankaError("invalid plan; valid: speed > 0 m/s and lift >= 0 m")
+            raise InvalidArgumentError("invalid plan; valid: speed > 0 m/s and lift >= 0 m")
         self.plan, self.gripper = plan, gripper
         opened = GripperCommand("move", plan.open_width_m, plan.grasp.speed_m_per_s)
         self.steps = (

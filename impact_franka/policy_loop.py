@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
+from impact_envs.errors import InvalidArgumentError
 from impact_envs.rates import POLICY_HZ
 from impact_franka.fci import FciReading, FrankaError
 from impact_franka.gripper import CHILD_NICE
@@ -88,7 +89,8 @@ class PolicyTarget:
                  gripper_host: str | None = None) -> None:
         low, high = (np.asarray(w, dtype=float) for w in workspace)
         if low.shape != (3,) or high.shape != (3,) or not np.all(low < high):
-            raise FrankaError("invalid workspace; valid: (low (3,), high (3,)) with low < high")
+            raise InvalidArgumentError("invalid workspace; valid: (low (3,), high (3,)) finite, "
+                                       "with low < high")
         self.low, self.high, self.max_step_m = low, high, float(max_step_m)
         self._args = (make_policy, extra_obs, gripper_host)
         self.refused = self.actions = 0

@@ -1,9 +1,22 @@
-"""Fixtures of the FCI tests: a simulator serving on 127.0.0.1:1337 for one test."""
+"""Fixtures of the FCI tests: a simulator serving on 127.0.0.1:1337 for one test; the
+one-client lock's name private to this test session."""
 
 from __future__ import annotations
 
+import os
+
 import pytest
 from franka_servers import HERE, serving, simulator_python
+
+
+@pytest.fixture(autouse=True)
+def _private_lock_names(monkeypatch):
+    """The one-client lock is one name per robot for the whole machine (connection.py): test
+    sessions run side by side (pytest -n, two checkouts) would refuse each other's in-process
+    runs. Each session gets names of its own; CLI subprocesses keep the real ones."""
+    from impact_franka import connection
+
+    monkeypatch.setattr(connection, "LOCK_PREFIX", f"impact-robot-test{os.getpid()}")
 
 
 @pytest.fixture()

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from franka_servers import port_open
 
-from impact_envs.errors import ImpactError
+from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_franka.fci import (
     FrankaError,
     fr3_config,
@@ -106,9 +106,11 @@ def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim_no_fri
 
     out = tmp_path / "run"
 
+    started = tmp_path / "started"  # beside --out: the run's folder is created after it
+
     def arm_timer() -> None:  # SIGINT 20 s after the loop started (warm-up and imports first)
         deadline = time.monotonic() + 120.0
-        while not (out / "started").exists() and time.monotonic() < deadline:
+        while not started.exists() and time.monotonic() < deadline:
             time.sleep(0.05)
         time.sleep(20.0)
         os.kill(os.getpid(), signal.SIGINT)
@@ -120,7 +122,7 @@ def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim_no_fri
     original = runner.hold
 
     def marked_hold(*args, **kwargs):
-        (out / "started").touch()
+        started.touch()
         return original(*args, **kwargs)
 
     monkeypatch.setattr(runner, "hold", marked_hold)
@@ -205,7 +207,7 @@ def test_pending_robot_errors_refuse_unless_recover(monkeypatch, capsys) -> None
     """The robot reports an error from an earlier run: impact-robot refuses with one line, and
     with --recover it calls libfranka's automatic error recovery first."""
     plf = pytest.importorskip("pylibfranka")
-    from impact_franka import cli, session
+    from impact_franka import cli, connection, session
 
     calls = []
 
@@ -221,6 +223,7 @@ def test_pending_robot_errors_refuse_unless_recover(monkeypatch, capsys) -> None
             self.errors = ""
 
     monkeypatch.setattr(plf, "Robot", _Robot)
+    monkeypatch.setattr(connection, "probe", lambda host, timeout_s: None)  # answers at once
     args = cli._parser().parse_args(["check", "--host", "127.0.0.1"])
     with pytest.raises(ImpactError, match=r"reports errors \[joint_reflex\]; valid: .*--recover"):
         session.connect(args)
@@ -328,7 +331,7 @@ def test_unwritable_out_is_refused_before_connecting(tmp_path, capsys) -> None:
 
     blocker = tmp_path / "file"
     blocker.write_text("keep me")
-    assert main(["hold", "--host", "127.0.0.1", "--out", str(blocker / "run")]) == 1
+    assert main(["hold", "--host", "127.0.0.1", "--out", str(blocker / "run")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("impact-robot: invalid --out") and err.count("\n") == 1
     assert blocker.read_text() == "keep me"
@@ -443,23 +446,28 @@ def test_a_policy_target_refuses_a_bad_workspace() -> None:
     from impact_franka.demo import CirclePolicy
     from impact_franka.policy_loop import PolicyTarget
 
-    with pytest.raises(FrankaError, match="invalid workspace"):
-        PolicyTarget(CirclePolicy, None, workspace=(np.ones(3), np.zeros(3)))
+    for low, high in [(np.ones(3), np.zeros(3)), (np.zeros(3), np.array([1.0, np.nan, 1.0]))]:
+        with pytest.raises(InvalidArgumentError, match="invalid workspace"):
+            PolicyTarget(CirclePolicy, None, workspace=(low, high))
 
 
 @pytest.mark.parametrize("argv, message", [
     (["hold", "--host", "127.0.0.1", "--seconds", "5", "--step-m", "0,0,-0.05", "--step-at-s",
       "9"], "invalid --step-at-s"),
     (["hold", "--host", "127.0.0.1", "--step-m", "0,0,0.01", "--step-at-s", "nan"],
-     "invalid --step-at-s"),
-    (["hold", "--host", "127.0.0.1", "--max-payload-kg", "-1"], "invalid --max-payload-kg"),
+     "argument --step-at-s: invalid value 'nan'"),
+    (["hold", "--host", "127.0.0.1", "--max-payload-kg", "-1"],
+     "argument --max-payload-kg: invalid value '-1'"),
 ])
 def test_bad_hold_arguments_are_one_line_before_connecting(argv, message, capsys) -> None:
     from impact_franka.cli import main
 
-    assert main(argv) == 1
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's refusals
+        code = exc.code
     err = capsys.readouterr().err
-    assert err.startswith(f"impact-robot: {message}") and err.count("\n") == 1
+    assert code == 2 and message in err and err.count("\n") == 1
 
 
 def test_a_bad_flag_value_is_one_line_exit_2(capsys) -> None:

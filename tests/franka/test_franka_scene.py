@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 from franka_servers import HERE, franky_scene, serving, simulator_python
 
-from impact_franka.fci import FrankaError
+from impact_envs.errors import InvalidArgumentError
 from impact_franka.gripper import GripperCommand, GripperReply
 from impact_franka.pick_place import PickPlacePlan, PickPlaceTarget, Pose
 
@@ -147,7 +147,7 @@ def test_teach_records_the_tcp_pose_and_pick_place_reads_it(tmp_path, capsys) ->
     pose = resolve_pose("home", poses, np.array([1.0, 0.0, 0.0, 0.0]))
     np.testing.assert_allclose(pose.pos_m, [0.554, 0.0, 0.521], atol=3e-3)  # the start TCP
     assert abs(abs(pose.quat_wxyz[1]) - 1.0) < 0.01 or abs(pose.quat_wxyz[2]) > 0.9  # down
-    with pytest.raises(FrankaError, match="valid: X,Y,Z in metres, or one of home in"):
+    with pytest.raises(InvalidArgumentError, match="valid: X,Y,Z in metres, or one of home in"):
         resolve_pose("hoome", poses, DOWN)
 
 
@@ -162,7 +162,7 @@ def test_a_wrong_gripper_host_is_one_line_before_any_motion(tmp_path, capsys) ->
     err = capsys.readouterr().err
     assert status == 1 and err.count("\n") == 1
     assert "cannot connect to the Franka Hand at 127.0.0.2" in err
-    assert not (tmp_path / "run" / "ticks.csv").exists()  # nothing moved
+    assert not (tmp_path / "run").exists()  # nothing moved, nothing written
 
 
 def test_a_second_client_is_refused_in_one_line(tmp_path) -> None:
@@ -240,9 +240,11 @@ def test_a_failed_grasp_retreats_and_is_named() -> None:
 
 @pytest.mark.parametrize(("argv", "message"), [
     (["--pick", "home"], "invalid --pick 'home'; valid: X,Y,Z in metres, or a pose name"),
-    (["--grasp-width-m", "0.2"], "invalid --grasp-width-m 0.2; valid: 0 to 0.08"),
-    (["--speed-m-s", "3"], "invalid --speed-m-s 3.0; valid: 0.01 to 0.5"),
-    (["--pick", "1.5,0,0.3"], "from the shoulder; valid: within 0.95 m of (0, 0, 0.333) m"),
+    (["--grasp-width-m", "0.2"], "--grasp-width-m: invalid value '0.2'; valid: a finite number "
+     ">= 0 and <= 0.08"),
+    (["--speed-m-s", "3"], "--speed-m-s: invalid value '3'"),
+    (["--pick", "1.5,0,0.3"], "from the shoulder; valid: within 0.95 m of the shoulder "
+     "(0, 0, 0.333) m"),
 ])
 def test_bad_pick_place_arguments_are_one_line_before_connecting(argv, message,
                                                                   capsys) -> None:
@@ -251,7 +253,11 @@ def test_bad_pick_place_arguments_are_one_line_before_connecting(argv, message,
     base = {"--pick": "0.5,0,0.3", "--place": "0.5,0.1,0.3"}
     base.update(dict(zip(argv[::2], argv[1::2], strict=True)))
     args = ["pick-place", "--host", "192.0.2.1"] + [x for kv in base.items() for x in kv]
-    assert main(args) == 1
+    try:
+        code = main(args)
+    except SystemExit as exc:  # argparse's refusals
+        code = exc.code
+    assert code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
 
@@ -272,17 +278,18 @@ def test_taught_pose_files_are_checked_before_connecting(tmp_path, capsys) -> No
     connecting (192.0.2.1 is never dialled)."""
     from impact_franka.cli import main
 
-    poses = tmp_path / "poses.json"
+    poses, good = tmp_path / "poses.json", tmp_path / "good.json"
     poses.write_text('{"pick": {"pos_m": [0.5, 0.0], "quat_wxyz": [0, 1, 0, 0]}}')
+    good.write_text('{"pick": {"pos_m": [0.5, 0.0, 0.3], "quat_wxyz": [0, 1, 0, 0]}}')
     cases = [
         (["teach", "--host", "192.0.2.1", "--poses", str(tmp_path / "no" / "p.json"),
           "--name", "a"], "its directory is missing or not writable"),
-        (["pick-place", "--host", "192.0.2.1", "--poses", str(poses), "--pick", "pik",
+        (["pick-place", "--host", "192.0.2.1", "--poses", str(good), "--pick", "pik",
           "--place", "0.5,0.1,0.3"], "valid: X,Y,Z in metres, or one of pick in"),
         (["pick-place", "--host", "192.0.2.1", "--poses", str(poses), "--pick", "pick",
           "--place", "0.5,0.1,0.3"], "invalid pose 'pick' in"),
     ]
     for argv, message in cases:
-        assert main(argv) == 1
+        assert main(argv) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and message in err, err
