@@ -20,17 +20,15 @@ from __future__ import annotations
 
 import argparse
 import os
-import shutil
 from collections.abc import Callable
 from pathlib import Path
 
 import gymnasium as gym
-import zarr
 from tqdm import tqdm
 
 import impact_envs
 from impact_envs.cli import OneLineParser
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_envs.errors import ImpactError
 from impact_learn.collect_config import CollectConfig, parse_param_spec
 from impact_learn.collect_pixels import (
     add_observation_arguments,
@@ -46,7 +44,8 @@ from impact_learn.collect_run import (
     attempt_batches,
     local_batch_results,
 )
-from impact_learn.dataset import EpisodeMeta, FieldDims, ReplayWriter
+from impact_learn.collect_store import open_writer, partial_path
+from impact_learn.dataset import EpisodeMeta, ReplayWriter
 
 
 def default_env_factory(cfg: CollectConfig) -> Callable[[], gym.Env]:
@@ -129,7 +128,7 @@ def collect(
     expert = make_expert()  # before the store exists: an expert that cannot be built is bad input
     param_name = getattr(envs[0].unwrapped, "param_name", "object_mass")
     _check_param_values(envs[0], param_name, cfg)
-    writer = _open_store(cfg, stored_dims(envs[0]), store_attrs(cfg, param_name))
+    writer = open_writer(cfg, stored_dims(envs[0]), store_attrs(cfg, param_name))
     attempts = writer.attempts()
     attempt = max(int(writer.root.attrs.get("n_attempts", 0)), int(attempts.max(initial=-1)) + 1)
     batches = attempt_batches(cfg, attempt, param_name)
@@ -174,44 +173,6 @@ def _store_batch(writer: ReplayWriter, target: int, batch: AttemptBatch,
             bar.update(1)
         attempt = k + 1
     return attempt
-
-
-def partial_path(out: str | Path) -> Path:
-    """Where a collection writes until it is complete: ``OUT.partial``."""
-    return Path(f"{out}.partial")
-
-
-def _stored_episodes(path: Path) -> int:
-    """Complete episodes in a store (0 when it cannot be read, e.g. torn at creation)."""
-    try:
-        return int(zarr.open_group(str(path), mode="r")["meta/episode_ends"].shape[0])
-    except (KeyError, OSError, ValueError, zarr.errors.BaseZarrError):
-        return 0
-
-
-def _open_store(cfg: CollectConfig, obs_dims: FieldDims, attrs: dict) -> ReplayWriter:
-    """The writer on ``OUT.partial`` (renamed to ``OUT`` when complete).
-
-    A partial store without a complete episode (a run that failed early) is replaced; one
-    holding episodes is continued by ``--resume`` and otherwise refused. ``--resume`` on a
-    finished ``OUT`` checks its attributes, then moves it back to ``OUT.partial`` to append.
-    """
-    final, work = Path(cfg.out), partial_path(cfg.out)
-    if work.exists() and not cfg.resume:
-        n = _stored_episodes(work)
-        if n:
-            raise InvalidArgumentError(
-                f"{work} holds {n} episodes of an unfinished run; pass --resume to continue it "
-                "or delete it")
-        shutil.rmtree(work)
-    if final.exists():
-        if not cfg.resume:
-            raise InvalidArgumentError(f"{final} exists; pass --resume to append or remove it")
-        if work.exists():
-            raise InvalidArgumentError(f"both {final} and {work} exist; delete one of them")
-        ReplayWriter(final, obs_dims, attrs, append=True)  # refuses other attributes here
-        os.replace(final, work)
-    return ReplayWriter(work, obs_dims, attrs, append=cfg.resume)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -16,12 +16,14 @@ Layout of ``DATA.zarr``::
 Episodes are appended one at a time; ``meta/episode_ends`` is written last, so an interrupted
 append is discarded (truncated) when the store is reopened. Image arrays are chunked by
 ``IMAGE_CHUNK_FRAMES`` frames and compressed losslessly with zstd (level ``IMAGE_ZSTD_LEVEL``);
-a store holding them has ``format_version`` 2, a state-only store 1 (its bytes are as before).
+a store holding them has ``format_version`` 2, a state-only store 1. The attribute
+``checksums`` holds a digest of every chunk of every array, updated with each append
+(``store_check.py``): ``load_replay`` and ``--resume`` read every chunk and compare.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,24 +33,21 @@ import zarr
 from zarr.codecs import ZstdCodec
 
 from impact_envs.errors import InvalidArgumentError
-
-FORMAT_VERSION = 1
-"""Version of the zarr layout above (stored in attrs['format_version']) for state-only stores."""
-IMAGE_FORMAT_VERSION = 2
-"""``format_version`` of a store holding image arrays ``(N, H, W, C)``."""
-IMAGE_CHUNK_FRAMES = 64
-"""Frames per chunk of an image array (64 frames of 96x96 RGB: 1.8 MB before compression)."""
-IMAGE_ZSTD_LEVEL = 9
-ACTION_KEY = "action"
-META_DTYPES = {
-    "episode_param": "float64",
-    "episode_seed": "int64",
-    "episode_success": "bool",
-    "episode_attempt": "int64",
-}
-CHUNK_ROWS = 4096
-UNCHECKED_ATTRS = frozenset({"package_version", "n_attempts"})
-"""Attributes that may differ when a store is reopened for appending."""
+from impact_learn.replay_data import ReplayData, checked_layout, load_replay  # noqa: F401
+from impact_learn.store_check import ScanResult, StoreLayout, scan_store, store_layout
+from impact_learn.store_checksums import Checksums, DamagedStoreError
+from impact_learn.store_format import (  # noqa: F401 - the layout's names, importable from here
+    ACTION_DIM,
+    ACTION_KEY,
+    CHECKSUM_ATTR,
+    CHUNK_ROWS,
+    FORMAT_VERSION,
+    IMAGE_CHUNK_FRAMES,
+    IMAGE_FORMAT_VERSION,
+    IMAGE_ZSTD_LEVEL,
+    META_DTYPES,
+    UNCHECKED_ATTRS,
+)
 
 
 @dataclass(frozen=True)
@@ -104,20 +103,26 @@ class ReplayWriter:
         attrs: Mapping[str, Any],
         *,
         append: bool = False,
+        verify: bool = True,
     ) -> None:
         self.path = Path(path)
         self.obs_keys = tuple(obs_dims)
         self.images = {k: v for k, v in obs_dims.items() if isinstance(v, ImageSpec)}
         if append and self.path.exists():
-            self._open_for_append(attrs)
+            self._open_for_append(attrs, verify)
             return
         if self.path.exists():
             raise InvalidArgumentError(f"{self.path} exists; pass --resume to append or remove it")
         self.root = zarr.open_group(str(self.path), mode="w")
+        chunk_rows = {f"data/{k}": IMAGE_CHUNK_FRAMES if k in self.images else CHUNK_ROWS
+                      for k in (*obs_dims, ACTION_KEY)}
+        chunk_rows |= {f"meta/{k}": CHUNK_ROWS for k in (*META_DTYPES, "episode_ends")}
+        self.sums = Checksums.empty(chunk_rows)
         version = IMAGE_FORMAT_VERSION if self.images else FORMAT_VERSION
-        self.root.attrs.update({**attrs, "format_version": version})
+        self.root.attrs.update({**attrs, "format_version": version,
+                                CHECKSUM_ATTR: self.sums.to_attr()})
         data, meta = self.root.require_group("data"), self.root.require_group("meta")
-        for key, dim in {**obs_dims, ACTION_KEY: 10}.items():
+        for key, dim in {**obs_dims, ACTION_KEY: ACTION_DIM}.items():
             if isinstance(dim, ImageSpec):
                 _create_image_array(data, key, dim)
             else:
@@ -125,19 +130,19 @@ class ReplayWriter:
         for key, dtype in {**META_DTYPES, "episode_ends": "int64"}.items():
             meta.zeros(name=key, shape=(0,), chunks=(CHUNK_ROWS,), dtype=dtype)
 
-    def _open_for_append(self, attrs: Mapping[str, Any]) -> None:
-        """Open, check and trim an existing store; a damaged one is a one-line error."""
+    def _open_for_append(self, attrs: Mapping[str, Any], verify: bool) -> None:
+        """Open and check an existing store (every chunk against its checksum with
+        ``verify``), then trim an interrupted append; a damaged store is a one-line error and
+        is left as it was."""
         try:
             self.root = zarr.open_group(str(self.path), mode="r+")
+            layout = store_layout(self.root, self.path)
             self._check_attrs(attrs)
-            self._truncate_partial()
-            for key in (*self.obs_keys, ACTION_KEY, *META_DTYPES, "episode_ends"):
-                group = "meta" if key in META_DTYPES or key == "episode_ends" else "data"
-                arr = self.root[f"{group}/{key}"]
-                # every chunk decodes (a torn write does not); of an image array the last
-                # chunk, the only one an interrupted append rewrites
-                first = arr.shape[0] - 1 - (arr.shape[0] - 1) % arr.chunks[0]
-                arr[max(first, 0) if key in self.images else 0:]
+            scan = scan_store(layout, self.path, load=False, allow_unrecorded=True) if verify \
+                else None
+        except DamagedStoreError as exc:
+            raise InvalidArgumentError(f"cannot resume {exc.path}: the store is damaged: "
+                                       f"{exc.detail}; delete it and collect again") from None
         except InvalidArgumentError:
             raise
         except Exception as exc:  # noqa: BLE001 - zarr/numcodecs raise many types here
@@ -145,6 +150,30 @@ class ReplayWriter:
             raise InvalidArgumentError(
                 f"cannot resume {self.path}: the store is damaged ({type(exc).__name__}: "
                 f"{msg}); delete it and collect again") from None
+        try:
+            self._truncate_partial()
+            self._resume_checksums(layout, scan)
+        except OSError as exc:
+            raise InvalidArgumentError(
+                f"cannot resume {self.path}: cannot write to it ({exc.strerror or exc}); "
+                "valid: a writable store") from None
+
+    def _resume_checksums(self, layout: StoreLayout, scan: ScanResult | None) -> None:
+        """The checksum record to extend: the scan's (rows written after the record was last
+        saved are added), or the stored one when the store was just verified."""
+        if scan is None:
+            self.sums = Checksums.from_attr(self.root.attrs.get(CHECKSUM_ATTR), self.path)
+            checked = {name: s.rows for name, s in self.sums.arrays.items()}
+        else:
+            self.sums = scan.checksums(layout)
+            checked = scan.checked_rows
+        for name, sums in self.sums.arrays.items():
+            arr, upto, rows = layout.arrays[name], checked[name], layout.rows[name]
+            self.sums.set_tail(name, arr[upto - upto % sums.chunk_rows:upto])
+            if rows > upto:
+                self.sums.extend(name, np.asarray(arr[upto:rows]))
+        if scan is None or scan.checked_rows != layout.rows or not scan.recorded:
+            self.root.attrs[CHECKSUM_ATTR] = self.sums.to_attr()
 
     def _check_attrs(self, attrs: Mapping[str, Any]) -> None:
         stored = dict(self.root.attrs)
@@ -167,9 +196,11 @@ class ReplayWriter:
         n_steps = int(ends[-1]) if len(ends) else 0
         for key in (*self.obs_keys, ACTION_KEY):
             arr = self.root[f"data/{key}"]
-            arr.resize((n_steps, *arr.shape[1:]))
+            if arr.shape[0] != n_steps:
+                arr.resize((n_steps, *arr.shape[1:]))
         for key in META_DTYPES:
-            self.root[f"meta/{key}"].resize((len(ends),))
+            if self.root[f"meta/{key}"].shape[0] != len(ends):
+                self.root[f"meta/{key}"].resize((len(ends),))
 
     @property
     def n_episodes(self) -> int:
@@ -188,7 +219,7 @@ class ReplayWriter:
         self, obs: Mapping[str, np.ndarray], actions: np.ndarray, meta: EpisodeMeta
     ) -> None:
         """Append one episode: ``obs[key]`` ``(T, d_key)`` (``(T, H, W, C)`` for an image
-        key), ``actions`` ``(T, 10)``."""
+        key), ``actions`` ``(T, 10)``; the checksum record is saved after ``episode_ends``."""
         length = int(actions.shape[0])
         if length == 0 or any(np.shape(obs[k])[0] != length for k in self.obs_keys):
             raise InvalidArgumentError(
@@ -200,14 +231,17 @@ class ReplayWriter:
                     f"images {key!r} have shape {np.shape(obs[key])[1:]}; valid: {spec.shape}")
         ends = self.root["meta/episode_ends"]
         start = int(ends[-1]) if ends.shape[0] else 0
-        for key in self.obs_keys:
-            dtype = self.images[key].dtype if key in self.images else np.float32
-            self.root[f"data/{key}"].append(np.asarray(obs[key], dtype=dtype), axis=0)
-        self.root[f"data/{ACTION_KEY}"].append(np.asarray(actions, dtype=np.float32), axis=0)
+        rows = {f"data/{k}": np.asarray(obs[k], dtype=self.images[k].dtype if k in self.images
+                                        else np.float32) for k in self.obs_keys}
+        rows[f"data/{ACTION_KEY}"] = np.asarray(actions, dtype=np.float32)
         values = (meta.param, meta.seed, meta.success, meta.attempt)
         for key, value in zip(META_DTYPES, values, strict=True):
-            self.root[f"meta/{key}"].append(np.asarray([value], dtype=META_DTYPES[key]))
-        ends.append(np.asarray([start + length], dtype=np.int64))
+            rows[f"meta/{key}"] = np.asarray([value], dtype=META_DTYPES[key])
+        rows["meta/episode_ends"] = np.asarray([start + length], dtype=np.int64)
+        for name, block in rows.items():  # episode_ends last: it commits the episode
+            self.root[name].append(block, axis=0)
+            self.sums.extend(name, block)
+        self.root.attrs[CHECKSUM_ATTR] = self.sums.to_attr()
 
 
 def _create_image_array(group: zarr.Group, key: str, spec: ImageSpec) -> None:
@@ -215,57 +249,3 @@ def _create_image_array(group: zarr.Group, key: str, spec: ImageSpec) -> None:
     group.create_array(name=key, shape=(0, *spec.shape),
                        chunks=(IMAGE_CHUNK_FRAMES, *spec.shape), dtype=spec.dtype,
                        compressors=ZstdCodec(level=IMAGE_ZSTD_LEVEL), fill_value=0)
-
-
-@dataclass(frozen=True)
-class ReplayData:
-    """A whole demonstration store loaded into memory.
-
-    Attributes:
-        data: ``{key: (N, d)}`` float32 arrays, including ``"action"`` ``(N, 10)``.
-        episode_ends: ``(E,)`` exclusive end indices.
-        meta: ``{name: (E,)}`` per-episode metadata (``episode_param``, ``episode_seed``, ...).
-        attrs: Store attributes.
-    """
-
-    data: dict[str, np.ndarray]
-    episode_ends: np.ndarray
-    meta: dict[str, np.ndarray]
-    attrs: dict[str, Any]
-
-    @property
-    def n_episodes(self) -> int:
-        """Number of episodes E."""
-        return int(self.episode_ends.shape[0])
-
-    def obs_matrix(self, keys: Sequence[str]) -> np.ndarray:
-        """Concatenate observation arrays ``keys`` into ``(N, D_obs)``."""
-        missing = [k for k in keys if k not in self.data]
-        if missing:
-            raise InvalidArgumentError(
-                f"observation keys {missing} not in dataset; valid keys: {', '.join(self.data)}"
-            )
-        return np.concatenate([self.data[k] for k in keys], axis=1).astype(np.float32)
-
-
-def load_replay(path: str | Path) -> ReplayData:
-    """Load a store written by ``ReplayWriter`` (complete episodes only)."""
-    if not Path(path).exists():
-        raise InvalidArgumentError(f"dataset {path} does not exist")
-    try:
-        root = zarr.open_group(str(path), mode="r")
-        ends = np.asarray(root["meta/episode_ends"][:], dtype=np.int64)
-        n_steps = int(ends[-1]) if len(ends) else 0
-        data = {k: np.asarray(a[:n_steps]) for k, a in root["data"].arrays()}
-        meta = {k: np.asarray(root[f"meta/{k}"][: len(ends)]) for k in META_DTYPES}
-    except Exception as exc:  # noqa: BLE001 - zarr raises many types for foreign/corrupt stores
-        msg = " ".join(str(exc).split())[:120]
-        raise InvalidArgumentError(
-            f"{path} is not a readable demonstration store (impact-collect's zarr layout): "
-            f"{type(exc).__name__}: {msg}") from None
-    if ACTION_KEY not in data or len(ends) == 0:
-        raise InvalidArgumentError(
-            f"{path} holds no episodes with actions (data/{ACTION_KEY}, meta/episode_ends)")
-    if any(len(a) < n_steps for a in data.values()):
-        raise InvalidArgumentError(f"{path} is truncated: arrays shorter than episode_ends says")
-    return ReplayData(data, ends, meta, dict(root.attrs))

@@ -8,7 +8,8 @@ Written from the documented v3.0 layout (docs/lerobot.md): ``meta/info.json``,
 ``meta/stats.json``, ``meta/tasks.parquet``, ``meta/episodes/chunk-000/file-000.parquet``,
 ``data/chunk-CCC/file-FFF.parquet`` (one row per frame) and, for each camera,
 ``videos/observation.images.<camera>/chunk-CCC/file-FFF.mp4`` (episodes one after another).
-The export is written to ``OUT.partial`` and renamed to ``OUT`` when complete.
+The store is checked in full first (every chunk against the checksum written with it); the
+export is written to ``OUT.partial`` and renamed to ``OUT`` when complete.
 """
 
 from __future__ import annotations
@@ -24,8 +25,9 @@ import zarr
 
 from impact_envs.cli import OneLineParser
 from impact_envs.errors import ImpactError, InvalidArgumentError
-from impact_learn.dataset import ACTION_KEY
+from impact_learn.dataset import ACTION_KEY, checked_layout
 from impact_learn.lerobot_video import VideoOptions
+from impact_learn.store_check import scan_store
 
 CODEBASE_VERSION = "v3.0"
 CHUNKS_SIZE = 1000
@@ -170,34 +172,57 @@ def main(argv: list[str] | None = None) -> None:
 
 
 def export_lerobot(cfg: ExportConfig) -> dict[str, Any]:
-    """Write the dataset; returns a summary (episodes, frames, features, skipped arrays)."""
+    """Write the dataset; returns a summary (episodes, frames, features, skipped arrays).
+
+    The store is checked in full first (``store_check``: layout, finite states and actions,
+    every chunk against its checksum) and the frame sizes before anything is written; the
+    files go to ``OUT.partial``, created here and removed on any failure, then renamed to
+    ``OUT``. An existing ``OUT`` or ``OUT.partial`` is refused, never removed."""
     from impact_learn.lerobot_write import write_dataset
 
     final, work = Path(cfg.out), Path(f"{cfg.out}.partial")
-    if final.exists():
-        raise InvalidArgumentError(f"{final} exists; remove it or give another --out")
-    root = _open_store(cfg.data)
-    if work.exists():
-        shutil.rmtree(work)
-    summary = write_dataset(root, work, cfg)
-    os.replace(work, final)
+    for path in (final, work):
+        if path.exists() or path.is_symlink():
+            raise InvalidArgumentError(f"{path} exists; remove it or give another --out")
+    layout = checked_layout(cfg.data)
+    scan_store(layout, cfg.data, load=False)
+    _check_frame_sizes(layout.root["data"])
+    created = _make_folder(work)
+    try:
+        summary = write_dataset(layout.root, work, cfg)
+        os.replace(work, final)
+    except BaseException as exc:
+        for folder in created:
+            shutil.rmtree(folder, ignore_errors=True)
+        if isinstance(exc, OSError):
+            raise InvalidArgumentError(f"cannot write {work}: {exc.strerror or exc}; valid: "
+                                       "an --out in a writable folder") from None
+        raise
     return summary
 
 
-def _open_store(path: str) -> zarr.Group:
-    if not Path(path).exists():
-        raise InvalidArgumentError(f"dataset {path} does not exist")
+def _make_folder(work: Path) -> list[Path]:
+    """Create ``work`` and its missing parents; returns them, outermost first (what a failed
+    export removes). A location that cannot be written is a one-line error."""
+    missing = [p for p in (work, *work.parents) if not p.exists()][::-1]
     try:
-        root = zarr.open_group(path, mode="r")
-        n = root["meta/episode_ends"].shape[0]
-        root[f"data/{ACTION_KEY}"]
-    except Exception as exc:  # noqa: BLE001 - zarr raises many types for foreign stores
-        raise InvalidArgumentError(
-            f"{path} is not a readable demonstration store (impact-collect's zarr layout): "
-            f"{type(exc).__name__}") from None
-    if n == 0:
-        raise InvalidArgumentError(f"{path} holds no episodes")
-    return root
+        work.mkdir(parents=True)
+    except OSError as exc:
+        for folder in reversed(missing):
+            if folder.is_dir():
+                folder.rmdir()
+        raise InvalidArgumentError(f"cannot create {work}: {exc.strerror or exc}; valid: an "
+                                   "--out in a writable folder") from None
+    return missing[:1]
+
+
+def _check_frame_sizes(data: zarr.Group) -> None:
+    """yuv420p video needs even frame sizes: refused before anything is written."""
+    for key, arr in sorted(data.arrays()):
+        if arr.ndim == 4 and key.endswith("_rgb") and (arr.shape[1] % 2 or arr.shape[2] % 2):
+            raise InvalidArgumentError(
+                f"cannot encode data/{key}'s {arr.shape[2]}x{arr.shape[1]} frames as yuv420p "
+                "video; valid: even sizes")
 
 
 if __name__ == "__main__":

@@ -7,7 +7,8 @@ Usage::
 
 Outputs in ``--out``: ``policy/`` (latest EMA policy, loadable with ``DiffusionPolicy.load``),
 ``best/`` (EMA policy with the lowest held-out action MSE), ``train_state/`` (resumable state),
-``log.csv`` and ``run.json``.
+``log.csv`` and ``run.json``. ``--resume`` refuses flags that differ from the run's
+(``train_resume.py``) and data other than the run's (content fingerprints).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from impact_envs.policies.diffusion.policy import DiffusionPolicy
 from impact_learn.ema import EMA
 from impact_learn.train_data import TrainData, load_train_data
 from impact_learn.train_log import TrainLog, evaluate
+from impact_learn.train_resume import check_resume_flags
 from impact_learn.train_state import (
     TrainState,
     find_train_state,
@@ -116,7 +118,8 @@ def export_policy(state: TrainState, data: TrainData, cfg: DiffusionConfig, out:
 def _start(
     cfg: DiffusionConfig, data_path: Path, out_dir: Path, opts: RunOptions
 ) -> tuple[DiffusionConfig, TrainData, TrainState]:
-    """Load the data and a fresh or resumed state (the run's config.json wins on resume)."""
+    """Load the data and a fresh or resumed state (on resume: the run's config.json, its data
+    and split checked by `_check_same_run`)."""
     ckpt = find_train_state(out_dir / "train_state")
     if ckpt is not None and not opts.resume:
         raise InvalidArgumentError(f"{out_dir} holds a training run; pass --resume or pick --out")
@@ -126,17 +129,35 @@ def _start(
     state = init_state(cfg, data.normalizer.obs.dim)
     if ckpt is not None:
         saved = Normalizer.from_state_dict(load_train_state(state, ckpt))
-        if not torch.equal(saved.obs.scale, data.normalizer.obs.scale):
-            raise InvalidArgumentError(
-                f"{data_path} changed since the run started; use a new --out"
-            )
-        if state.step > opts.steps:
-            raise InvalidArgumentError(
-                f"{out_dir} is at step {state.step}; valid: --steps >= {state.step}")
+        _check_same_run(state, data, saved, opts, (data_path, out_dir))
+    else:
+        state.info |= {"val_fraction": opts.val_fraction, "data_fingerprints": data.fingerprints}
     _note_schedule(state, opts.steps)
     out_dir.mkdir(parents=True, exist_ok=True)
     cfg.to_json(out_dir / "config.json")
     return cfg, data, state
+
+
+def _check_same_run(state: TrainState, data: TrainData, saved: Normalizer, opts: RunOptions,
+                    paths: tuple[Path, Path]) -> None:
+    """A resumed run must read the data it started on (the content of every array it uses:
+    observations, cameras, actions, episode ends) with the same held-out split."""
+    data_path, out_dir = paths
+    fraction = state.info.get("val_fraction", opts.val_fraction)
+    if fraction != opts.val_fraction:
+        raise InvalidArgumentError(
+            f"--val-fraction {opts.val_fraction} differs from the run's {fraction} in "
+            f"{out_dir}; leave it out or use a new --out")
+    recorded = state.info.get("data_fingerprints") or {}
+    changed = [name for name, value in recorded.items() if data.fingerprints.get(name) != value]
+    if changed or not torch.equal(saved.obs.scale, data.normalizer.obs.scale):
+        what = ", ".join(changed) or "the observation ranges"
+        raise InvalidArgumentError(
+            f"{data_path} is not the data the run in {out_dir} started on ({what} differ); "
+            "resume on that store or use a new --out")
+    if state.step > opts.steps:
+        raise InvalidArgumentError(
+            f"{out_dir} is at step {state.step}; valid: --steps >= {state.step}")
 
 
 def _note_schedule(state: TrainState, steps: int) -> None:
@@ -197,7 +218,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--config", help="DiffusionConfig JSON (overrides the defaults)")
     parser.add_argument("--checkpoint-every", type=int, default=1000, help="steps")
     parser.add_argument("--val-every", type=int, default=1000, help="steps")
-    parser.add_argument("--val-fraction", type=float, default=0.05)
+    parser.add_argument("--val-fraction", type=float,
+                        help=f"episodes held out (default: {RunOptions.val_fraction}; on "
+                        "--resume: the run's)")
     parser.add_argument("--threads", type=int, help="torch CPU threads (default: torch's)")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     return parser
@@ -224,11 +247,15 @@ def run_from_args(args: argparse.Namespace) -> None:
     base = DiffusionConfig.from_json(args.config) if args.config else DiffusionConfig()
     overrides = {"batch_size": args.batch_size, "seed": args.seed}
     cfg = dataclasses.replace(base, **{k: v for k, v in overrides.items() if v is not None})
+    run_info = check_resume_flags(args, cfg) if args.resume else {}
+    fraction = args.val_fraction
+    if fraction is None:
+        fraction = run_info.get("val_fraction", RunOptions.val_fraction)
     opts = RunOptions(
         steps=args.steps,
         checkpoint_every=args.checkpoint_every,
         val_every=args.val_every,
-        val_fraction=args.val_fraction,
+        val_fraction=fraction,
         resume=args.resume,
         progress=not args.no_progress,
     )

@@ -30,6 +30,7 @@ class TrainData:
         obs_dims: ``{obs_key: d_key}`` of ``cfg.obs_keys``.
         scheduler: DDPM scheduler for ``add_noise``.
         info: Dataset description stored with the exported policies.
+        fingerprints: Content digest of each array the run reads (``--resume`` compares them).
     """
 
     normalizer: Normalizer
@@ -38,6 +39,7 @@ class TrainData:
     obs_dims: dict[str, int]
     scheduler: DDPMScheduler
     info: dict[str, Any]
+    fingerprints: dict[str, str]
 
 
 def split_episodes(n_episodes: int, val_fraction: float, seed: int) -> tuple[list, list]:
@@ -63,22 +65,6 @@ def _check_gripper(cfg: DiffusionConfig, gripper: np.ndarray) -> None:
         )
 
 
-def _check_finite(replay: ReplayData, keys: tuple[str, ...], path: Path) -> None:
-    """Refuse a store whose training arrays hold NaN or inf (before anything is written)."""
-    for key in keys:
-        values = np.asarray(replay.data[key]) if key in replay.data else None
-        if values is None:
-            continue  # a missing key is reported by obs_matrix with the valid keys
-        bad = ~np.isfinite(values)
-        if bad.any():
-            rows = np.flatnonzero(bad.any(axis=1))
-            episodes = np.unique(np.searchsorted(replay.episode_ends, rows, side="right"))
-            raise InvalidArgumentError(
-                f"{path}: data/{key} holds {int(bad.sum())} non-finite values (NaN/inf) in "
-                f"episodes {episodes[:5].tolist()}{' ...' if len(episodes) > 5 else ''}; "
-                "refusing to train on them")
-
-
 def _images(cfg: DiffusionConfig, replay: ReplayData, path: Path) -> dict[str, torch.Tensor]:
     """The ``(N, H, W, 3)`` uint8 frames of ``cfg.vision``'s cameras (none without vision)."""
     if cfg.vision is None:
@@ -100,8 +86,7 @@ def _images(cfg: DiffusionConfig, replay: ReplayData, path: Path) -> dict[str, t
 
 def load_train_data(cfg: DiffusionConfig, path: Path, val_fraction: float) -> TrainData:
     """Load ``path``, split episodes, fit the normalizer on the training part."""
-    replay = load_replay(path)
-    _check_finite(replay, (*cfg.obs_keys, ACTION_KEY), path)
+    replay = load_replay(path)  # every chunk checked; NaN/inf in a state or action refused
     obs = replay.obs_matrix(cfg.obs_keys)
     actions = replay.data[ACTION_KEY]
     _check_gripper(cfg, np.asarray(actions[:, GRIPPER_DIM]))
@@ -132,4 +117,12 @@ def load_train_data(cfg: DiffusionConfig, path: Path, val_fraction: float) -> Tr
         obs_dims={k: int(replay.data[k].shape[1]) for k in cfg.obs_keys},
         scheduler=make_train_scheduler(cfg),
         info=info,
+        fingerprints=_fingerprints(replay, cfg),
     )
+
+
+def _fingerprints(replay: ReplayData, cfg: DiffusionConfig) -> dict[str, str]:
+    """Fingerprints of the arrays training reads: observations, cameras, actions, episodes."""
+    images = cfg.vision.image_keys if cfg.vision is not None else ()
+    names = [f"data/{k}" for k in (*cfg.obs_keys, *images, ACTION_KEY)] + ["meta/episode_ends"]
+    return {name: replay.fingerprints[name] for name in names}
