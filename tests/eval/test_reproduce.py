@@ -1,31 +1,29 @@
-"""impact-eval reproduce: manifest, whole-table and per-cell checks, tamper detection, bad input.
+"""impact-eval reproduce: manifest, whole-table and per-cell reruns, where the rerun goes.
 
-Runs on the fake env of ``fixtures.eval_fake`` (milliseconds per episode) in subprocesses, with a
-results directory of the test's own (``--results``).
+In-process on the fake env of ``fixtures.eval_fake`` with a results directory of the test's own
+(``--results``; ``fixtures.reproduce_fake``). The other-CPU rule and row naming:
+test_reproduce_cpu.py; bad and damaged input: test_reproduce_inputs.py.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import signal
+import tempfile
+import threading
 from pathlib import Path
 
 import pytest
 from fixtures.eval_fake import ENV_ID, run_cli
-
-SWEEP = ["--env", ENV_ID, "--method", "fake_fast,fake_slow", "--masses", "0.5,1,3",
-         "--episodes", "3", "--workers", "2", "--envs-per-worker", "2"]
+from fixtures.reproduce_fake import ROWS, TABLE, manifest, record_fake_table, reproduce
 
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A results directory with one recorded table, ``fake`` (swept once per module)."""
-    root = tmp_path_factory.mktemp("recorded") / "results"
-    done = run_cli(*SWEEP, "--out", str(root / "fake"))
-    assert done.returncode == 0, done.stderr
-    rec = run_cli("reproduce", "--record", "fake", "--results", str(root))
-    assert rec.returncode == 0, rec.stderr
-    return root
+    return record_fake_table(tmp_path_factory.mktemp("recorded") / "results")
 
 
 @pytest.fixture()
@@ -34,101 +32,96 @@ def results(recorded: Path, tmp_path: Path) -> Path:
     return Path(shutil.copytree(recorded, tmp_path / "results"))
 
 
-def reproduce(results: Path, *args: str):
-    return run_cli("reproduce", *args, "--results", str(results))
+def _scratch_dirs() -> set[str]:
+    return {p.name for p in Path(tempfile.gettempdir()).glob(f"reproduce_{TABLE}_*")}
 
 
-def test_manifest_records_command_versions_and_hash(results: Path) -> None:
-    entry = json.loads((results / "manifest.json").read_text())["tables"]["fake"]
-    assert entry["rows"] == 2 * 3 * 3
+def test_manifest_records_command_versions_cpu_and_hash(results: Path, capsys) -> None:
+    entry = manifest(results)["tables"][TABLE]
+    assert entry["rows"] == ROWS
     assert entry["sweep_args"][:2] == ["--env", ENV_ID]
     assert "--out" not in entry["sweep_args"] and "--workers" not in entry["sweep_args"]
     assert entry["versions"]["mujoco"] and entry["git"]["sha"]
     assert len(entry["episodes_sha256"]) == 64
-    listed = reproduce(results, "--list")
-    assert listed.returncode == 0 and listed.stdout.startswith("fake: 18 episodes")
+    assert set(entry["cpu"]) == {"cpu_model", "simd"} and entry["cpu"]["simd"]
+    code, out, _ = reproduce(results, capsys, "--list")
+    assert code == 0 and out.startswith(f"fake: {ROWS} episodes")
 
 
-@pytest.mark.parametrize("extra", [[], ["--workers", "1"], ["--envs-per-worker", "1"]])
-def test_whole_table_rerun_is_byte_identical(results: Path, extra: list[str]) -> None:
-    done = reproduce(results, "--check", "fake", *extra)
-    assert done.returncode == 0, done.stdout + done.stderr
-    assert "episodes.csv identical" in done.stdout
+@pytest.mark.parametrize("extra", [[], ["--envs-per-worker", "1"]])
+def test_whole_table_check_is_identical_and_leaves_no_folder(results: Path, capsys,
+                                                              extra: list[str]) -> None:
+    before = _scratch_dirs()
+    code, out, _ = reproduce(results, capsys, "--check", TABLE, *extra)
+    assert code == 0, out
+    assert "(the whole table): episodes.csv identical to the committed bytes" in out
+    assert "0 rows differ" in out
+    assert "kept in" not in out and "rerun in" not in out  # the temporary folder is gone
+    assert _scratch_dirs() == before
 
 
-def test_cells_are_rerun_through_resume_and_compared(results: Path, tmp_path: Path) -> None:
-    out = tmp_path / "rerun"
-    done = reproduce(results, "--check", "fake", "--cells", "fake_slow@1,fake_fast@3",
-                     "--out", str(out))
-    assert done.returncode == 0, done.stdout + done.stderr
-    runs = json.loads((out / "run.json").read_text())["invocations"]
+def test_cells_are_rerun_through_resume_and_kept_with_out(results: Path, tmp_path: Path,
+                                                          capsys) -> None:
+    out_dir = tmp_path / "rerun"
+    code, out, _ = reproduce(results, capsys, "--check", TABLE, "--cells",
+                             "fake_slow@1,fake_fast@3", "--out", str(out_dir))
+    assert code == 0, out
+    assert f"rerun kept in {out_dir}" in out
+    assert "(cells fake_fast@3,fake_slow@1)" in out
+    runs = json.loads((out_dir / "run.json").read_text())["invocations"]
     assert runs[-1]["resume"] and runs[-1]["episodes_run"] == 6  # the two cells only
 
 
-def test_a_changed_row_is_reported_by_cell(results: Path) -> None:
-    path = results / "fake" / "episodes.csv"
-    lines = path.read_text().splitlines(keepends=True)
-    i = next(k for k, line in enumerate(lines) if line.startswith("fake_slow,") and ",1.0," in line)
-    fields = lines[i].split(",")
-    fields[6] = "1" if fields[6] == "0" else "0"  # flip the outcome of one episode
-    lines[i] = ",".join(fields)
-    path.write_text("".join(lines))
-    checked = reproduce(results, "--check", "fake", "--cells", "fake_slow@1")
-    assert checked.returncode == 1, checked.stdout
-    assert "differs: fake: fake_slow @ 1: 1/3 episodes differ (1 in outcome" in checked.stdout
-    other = reproduce(results, "--check", "fake", "--cells", "fake_fast@0.5")
-    assert other.returncode == 1  # the tampered row is copied, but the manifest's hash differs
-    assert "DIFFERENT" in other.stdout
+def test_rerun_without_check_is_kept_in_the_tables_tmp(results: Path, capsys) -> None:
+    code, out, _ = reproduce(results, capsys, TABLE)
+    kept = results / TABLE / "tmp" / "rerun"
+    assert code == 0, out
+    assert f"rerun kept in {kept}" in out and (kept / "episodes.csv").is_file()
+    again, out, _ = reproduce(results, capsys, TABLE)  # replaces its own previous rerun
+    assert again == 0 and f"rerun kept in {kept}" in out
 
 
-def _set_recorded_cpu(results: Path, cpu: dict) -> None:
-    path = results / "manifest.json"
-    manifest = json.loads(path.read_text())
-    manifest["tables"]["fake"]["cpu"] = cpu
-    path.write_text(json.dumps(manifest))
+def test_a_table_named_twice_is_rerun_once(results: Path, capsys) -> None:
+    code, out, _ = reproduce(results, capsys, "--check", TABLE, TABLE)
+    assert code == 0 and out.count("identical to the committed bytes") == 1
 
 
-def _edit_first_row(results: Path, column: int, value: str) -> None:
-    path = results / "fake" / "episodes.csv"
-    lines = path.read_text().splitlines(keepends=True)
-    fields = lines[1].split(",")
-    fields[column] = value
-    lines[1] = ",".join(fields)
-    path.write_text("".join(lines))
+@pytest.mark.slow
+def test_console_entry_point_checks_a_cell(results: Path) -> None:
+    """The installed command's path (``python -m impact_eval``; ~10-30 s: a fresh interpreter
+    imports the package), one cell."""
+    done = run_cli("reproduce", "--check", TABLE, "--cells", "fake_fast@0.5", "--workers", "1",
+                   "--results", str(results))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "identical to the committed bytes" in done.stdout
 
 
-def test_the_manifest_records_the_cpu(results: Path) -> None:
-    entry = json.loads((results / "manifest.json").read_text())["tables"]["fake"]
-    assert set(entry["cpu"]) == {"cpu_model", "simd"} and entry["cpu"]["simd"]
+@pytest.mark.slow
+@pytest.mark.parametrize("extra", [["--workers", "2"],
+                                   ["--workers", "2", "--envs-per-worker", "2"]])
+def test_worker_processes_give_the_same_bytes(results: Path, capsys, extra: list[str]) -> None:
+    """Worker processes (~20 s: each imports the package) rerun the same bytes."""
+    code, out, _ = reproduce(results, capsys, "--check", TABLE, *extra)
+    assert code == 0 and "identical to the committed bytes" in out, out
 
 
-def test_on_another_cpu_floats_may_differ_but_outcomes_may_not(results: Path) -> None:
-    _set_recorded_cpu(results, {"cpu_model": "Some Other CPU", "simd": "avx2"})
-    _edit_first_row(results, 10, "123.456")  # energy_j: a float column
-    floats = reproduce(results, "--check", "fake")
-    assert floats.returncode == 0, floats.stdout + floats.stderr
-    assert "DIFFERENT" in floats.stdout and "0 episode outcomes differ" in floats.stdout
-    path = results / "fake" / "episodes.csv"
-    row = path.read_text().splitlines()[1].split(",")
-    _edit_first_row(results, 6, "0" if row[6] == "1" else "1")  # success
-    outcome = reproduce(results, "--check", "fake")
-    assert outcome.returncode == 1 and "1 episode outcomes differ" in outcome.stdout
-
-
-def test_on_the_recording_cpu_any_byte_fails(results: Path) -> None:
-    _edit_first_row(results, 10, "123.456")
-    done = reproduce(results, "--check", "fake")
-    assert done.returncode == 1 and "DIFFERENT" in done.stdout
-
-
-@pytest.mark.parametrize("args,message", [
-    (["--check", "nope"], "unknown table 'nope'; valid choices: fake"),
-    (["--check", "fake", "--cells", "fake_fast@7"], "invalid cell 'fake_fast@7'"),
-    (["--check", "fake", "--cells", "scripted@1"], "invalid cell 'scripted@1'"),
-    (["fake", "--cells", "fake_fast@1"], "--cells needs --check"),
-    ([], "name a TABLE"),
-])
-def test_bad_input_is_one_line_exit_2(results: Path, args: list[str], message: str) -> None:
-    done = reproduce(results, *args)
-    assert done.returncode == 2
-    assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
+@pytest.mark.parametrize("keep", [False, True])
+def test_sigterm_mid_rerun_leaves_no_folder(results: Path, tmp_path: Path, capsys,
+                                            monkeypatch: pytest.MonkeyPatch, keep: bool) -> None:
+    """``timeout`` (CI) sends SIGTERM: the temporary or --out folder is removed, exit 143."""
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    monkeypatch.setenv("IMPACT_FAKE_STEP_DELAY", "0.01")  # ~5 s of episodes: stopped at 0.5 s
+    out_dir = tmp_path / "kept" / "rerun"
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGTERM))
+    timer.start()
+    try:
+        with pytest.raises(SystemExit) as stopped:
+            reproduce(results, capsys, "--check", TABLE, *(["--out", str(out_dir)] if keep else []))
+    finally:
+        timer.cancel()
+    assert stopped.value.code == 128 + signal.SIGTERM
+    assert "terminated (signal 15)" in capsys.readouterr().out
+    assert list(scratch.iterdir()) == [] and not (tmp_path / "kept").exists()
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # the handler is restored
