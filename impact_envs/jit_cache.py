@@ -27,13 +27,6 @@ PACKAGE_DIR = Path(__file__).resolve().parent
 KERNEL_DIRS = ("control", "loop", "robot")
 """Package folders (searched recursively) whose modules may define ``@njit`` functions."""
 NJIT_MARK = re.compile(rb"^@njit", re.MULTILINE)
-TYPE_SOURCES = (
-    "control/arm_model.py",
-    "robot/sim.py",
-)
-"""Modules defining named tuples that kernels take as arguments (besides the kernel modules):
-a cached kernel refers to such a type by its module, so moving or changing one must
-invalidate the cache too (their digest counts; they hold no cached functions)."""
 
 STAMP_NAME = "impact_kernels.sha256"
 """File written into each cache directory: the digest its cached kernels were built from."""
@@ -49,6 +42,16 @@ def kernel_sources() -> list[Path]:
             if NJIT_MARK.search(path.read_bytes()):
                 found.append(path)
     return found
+
+
+def digest_sources() -> list[Path]:
+    """Every module under ``KERNEL_DIRS``, kernel modules or not: a cached kernel refers to the
+    named tuples it takes by their module (``DynamicsArrays`` in control/arm_model.py,
+    ``SimArrays`` in robot/sim.py, a stage's scalars in its config module), and constants it
+    reads may live beside them, so changing any of these must invalidate the cache too. (Only
+    modules with ``@njit`` lines were counted until 2026-11-27: a stage's type module without one
+    left kernels cached against a class that no longer existed.)"""
+    return [path for folder in KERNEL_DIRS for path in sorted((PACKAGE_DIR / folder).rglob("*.py"))]
 
 
 def sources_digest(sources: list[Path]) -> str:
@@ -98,7 +101,7 @@ def refresh_cache(sources: list[Path], digest: str) -> int:
 
 def ensure_fresh_kernel_cache() -> int:
     """``refresh_cache`` for IMPACT's own kernel modules (called on ``import impact_envs``);
-    the digest covers the kernel sources and ``TYPE_SOURCES``."""
+    the digest covers ``digest_sources``."""
     sources = kernel_sources()
-    digest = sources_digest([*sources, *(PACKAGE_DIR / rel for rel in TYPE_SOURCES)])
+    digest = sources_digest(digest_sources())
     return refresh_cache(sources, digest)

@@ -60,12 +60,28 @@ def test_refresh_covers_numba_cache_dir(tmp_path, monkeypatch):
     assert (mirror / jit_cache.STAMP_NAME).read_text().strip() == "new"
 
 
-def test_type_sources_define_the_named_tuples_kernels_take():
-    """Moving a kernel-argument named tuple to another module made cached kernels unloadable
-    (they pickle the type by module path); its module must count in the digest."""
+def test_digest_covers_the_modules_of_the_named_tuples_kernels_take():
+    """Moving or renaming a kernel-argument named tuple made cached kernels unloadable (they
+    pickle the type by module path); its module must count in the digest, @njit or not."""
     from impact_envs.control.arm_model import DynamicsArrays
     from impact_envs.robot.sim import SimArrays
 
+    covered = {p.relative_to(jit_cache.PACKAGE_DIR).as_posix() for p in jit_cache.digest_sources()}
     modules = {t.__module__.removeprefix("impact_envs.").replace(".", "/") + ".py"
                for t in (DynamicsArrays, SimArrays)}
-    assert modules == set(jit_cache.TYPE_SOURCES)
+    assert modules <= covered
+    assert "control/impedance_config.py" in covered  # no @njit line, types kernels read
+    presets = (jit_cache.PACKAGE_DIR / "control/presets.py").read_bytes()
+    assert not jit_cache.NJIT_MARK.search(presets)
+    assert "control/presets.py" in covered
+
+
+def test_editing_a_module_without_njit_changes_the_digest(tmp_path):
+    """A changed type module (no @njit line) must change the stamp, so the kernels recompile."""
+    kern = tmp_path / "kern.py"
+    kern.write_text("@njit\ndef f():\n    pass\n")
+    types = tmp_path / "types.py"
+    types.write_text("class A(NamedTuple):\n    x: float\n")
+    before = jit_cache.sources_digest([kern, types])
+    types.write_text("class B(NamedTuple):\n    x: float\n")
+    assert jit_cache.sources_digest([kern, types]) != before
