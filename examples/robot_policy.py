@@ -25,7 +25,8 @@ from impact_franka.runner import run_loop
 
 
 def no_extra_obs() -> dict[str, np.ndarray]:
-    """What the robot cannot measure; e.g. {"hammer_pos": ..., "hammer_rot6d": ...}."""
+    """What the robot cannot measure, named as the env's observation names it; for the Hammer
+    task e.g. {"object_pos": ..., "object_rot6d": ..., "goal_pos": ...} from your tracker."""
     return {}
 
 

@@ -1,12 +1,17 @@
 """IMPACT: Gymnasium environments and the internal-model predictive controller.
 
 Importing this package registers the environments, one per task (``tasks/registry.py``), e.g.
-``gym.make("IMPACT/Hammer-v0")``.
+``gym.make("IMPACT/Hammer-v0")``. On a machine without a display it first picks MuJoCo's
+headless GL backend when ``MUJOCO_GL`` is unset (``_gl.py``; before anything imports mujoco).
+The envs' option classes are importable from here: ``from impact_envs import
+ObservationOptions, RenderOptions, RobotOptions``.
 """
 
 from __future__ import annotations
 
+from impact_envs import _gl  # noqa: F401, I001 - first: MuJoCo reads MUJOCO_GL on import
 from impact_envs import jit_cache as _jit_cache
+from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.tasks.calligraphy import CalligraphyTask as _CalligraphyTask
 from impact_envs.tasks.disturbance import DisturbanceTask as _DisturbanceTask
 from impact_envs.tasks.dumbbell import DumbbellTask as _DumbbellTask
@@ -20,3 +25,5 @@ ENV_IDS = tuple(_register_task(t) for t in (_HammerTask, _DumbbellTask, _Calligr
 """The built-in envs, one per task."""
 
 _jit_cache.ensure_fresh_kernel_cache()
+
+__all__ = ["ENV_IDS", "ObservationOptions", "RenderOptions", "RobotOptions", "__version__"]

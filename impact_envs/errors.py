@@ -32,3 +32,8 @@ def check_choice(name: str, value: object, choices: list[str] | tuple[str, ...])
 
 class TrainingError(ImpactError):
     """Training cannot go on (e.g. a non-finite loss); nothing non-finite is written."""
+
+
+class RenderingError(ImpactError):
+    """No OpenGL context for MuJoCo's offscreen rendering (camera observations, ``render()``,
+    ``impact-eval --video``); the message says which ``MUJOCO_GL`` to set (``impact_envs._gl``)."""

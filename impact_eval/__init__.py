@@ -2,10 +2,13 @@
 
 Entry points: ``impact-eval`` (:func:`impact_eval.cli.main`) and, from Python,
 :func:`impact_eval.evaluate` for a policy object; see docs/eval.md. Submodules import their
-heavy dependencies lazily, so ``import impact_eval`` is cheap.
+heavy dependencies (torch, pandas, Matplotlib) lazily; ``impact_envs`` is imported first, so
+that its ``_gl`` picks MuJoCo's headless GL backend before anything loads mujoco.
 """
 
 from __future__ import annotations
+
+from impact_envs import _gl  # noqa: F401 - first: the headless GL backend before mujoco loads
 
 __all__ = ["evaluate", "main"]
 

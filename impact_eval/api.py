@@ -19,7 +19,9 @@ import pandas as pd
 
 from impact_envs.control.controller import CONTROLLERS
 from impact_envs.control.presets import PRESETS
-from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
+from impact_envs.envs.arguments import coerce_options
+from impact_envs.envs.options import ObservationOptions
+from impact_envs.errors import CheckpointError, ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.interface import Policy
 from impact_eval.grid import format_value
 from impact_eval.methods import MethodSpec, temporary_method
@@ -93,9 +95,36 @@ def _policy_factory(policy: object) -> Callable[[str, gym.Env], Policy]:
     def build(env_id: str, env: gym.Env) -> Policy:
         built = policy(env_id, env) if is_factory else policy  # type: ignore[operator]
         _check_policy_object(built, "the policy factory returned")
+        check_fits_env(built, env_id, env)
         return built  # type: ignore[return-value]
 
     return build
+
+
+def check_fits_env(policy: object, env_id: str, env: gym.Env) -> None:
+    """One line, before anything is written, when the policy says what it observes and the
+    env does not give it: a diffusion-policy checkpoint (its observation keys, sizes and
+    cameras, ``compat.check_policy_env``) or a policy with ``required_observations`` (the
+    scripted experts: the object's and goal's poses, hidden in the image modes)."""
+    spaces = getattr(env.observation_space, "spaces", {})
+    dp = sys.modules.get("impact_envs.policies.diffusion.policy")
+    if dp is not None and isinstance(policy, dp.DiffusionPolicy):
+        from impact_envs.policies.diffusion.compat import check_policy_env
+
+        try:
+            check_policy_env(policy, env_id, env, "given to evaluate()")
+        except CheckpointError as exc:
+            raise CheckpointError(f"{exc} (evaluate's observation= argument makes the env's "
+                                  "ObservationOptions)") from None
+        return
+    keys = getattr(policy, "required_observations", None) or ()
+    missing = [k for k in keys if k not in spaces]
+    if missing:
+        mode = getattr(getattr(env.unwrapped, "observation_options", None), "obs_mode", None)
+        raise InvalidArgumentError(
+            f"policy {type(policy).__name__} needs the observation entries "
+            f"{', '.join(missing)}, which the env's obs_mode {mode!r} does not give; valid: "
+            "evaluate(..., observation='state' or 'state+rgb')")
 
 
 def _raise_if_all_crashed(out: Path) -> None:
@@ -123,6 +152,7 @@ def evaluate(
     seed: int = 0,
     envs_per_worker: int = 4,
     resume: bool = False,
+    observation: ObservationOptions | dict | str | None = None,
 ) -> pd.DataFrame:
     """Evaluate ``policy`` on ``env_id`` over ``values`` of the env's sweep parameter.
 
@@ -142,6 +172,10 @@ def evaluate(
         envs_per_worker: Episodes run in lockstep (the batch size of ``policy.act``).
         resume: Continue an interrupted run in ``out``; every argument must be the same
             (controller and preset included), else the call is refused.
+        observation: What the env observes (``ObservationOptions``, a dict of its fields or
+            an ``obs_mode`` string; default the state). A policy that says what it needs (a
+            diffusion-policy checkpoint, a scripted expert) is checked against it before
+            anything is written: a camera checkpoint needs e.g. ``"rgb"``.
 
     Returns:
         The episodes table (one row per episode, the columns of ``episodes.csv``).
@@ -167,13 +201,17 @@ def evaluate(
         envs_per_worker=_check_int("envs_per_worker", envs_per_worker, 1),
         seed=_check_int("seed", seed, 0), resume=bool(resume),
     )
+    options = coerce_options("observation", observation, ObservationOptions)
     spec = MethodSpec(name, controller, build, "evaluate() policy object",
-                      preset=controller_preset)
+                      preset=controller_preset,
+                      observation=options if options.uses_images else None)
     with temporary_method(spec):
         plan = prepare(request)
         args = {"env": env_id, "method": name, "grid": request.grid, "param": param,
                 "episodes": episodes, "out": str(out), "seed": seed, "controller": controller,
                 "controller_preset": controller_preset}
+        if spec.observation is not None:
+            args["observation"] = repr(spec.observation)
         execute(plan, command=[sys.argv[0], "impact_eval.evaluate"], args=args)
     _raise_if_all_crashed(Path(out))
     return pd.read_csv(Path(out) / "episodes.csv", keep_default_na=False)

@@ -61,7 +61,7 @@ def sweep_parser() -> argparse.ArgumentParser:
         "writes episodes.csv, summary.csv, run.json and plots/. "
         f"'{PROG} report DIR' redraws a finished sweep from its CSV; "
         f"'{PROG} reproduce --check TABLE' reruns a reference table of results/ and compares "
-        "it byte for byte.",
+        "it with the committed rows (bytes on the recording CPU, outcomes on another).",
     )
     p.add_argument(
         "--quick",
@@ -117,8 +117,9 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         action="append",
         default=[],
         metavar="SECTION.FIELD=VALUE",
-        help="change one controller setting from the paper's defaults (repeatable; ablations), "
-        "e.g. internal_model.slow_rate_max=1.5; recorded in run.json",
+        help="change one field of the controller config on top of each method's preset "
+        "('default', or 'paper' for *_paper methods; repeatable; ablations), e.g. "
+        "internal_model.slow_rate_max=1.5; recorded in run.json",
     )
     p.add_argument(
         "--resume",
@@ -137,7 +138,9 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         type=int,
         default=0,
         metavar="K",
-        help="write the first K episodes of every cell as MP4 to OUT/videos (imageio-ffmpeg)",
+        help="write the first K episodes of every cell as MP4 to OUT/videos (imageio-ffmpeg; "
+        "rendering is checked before anything is written; no display: MUJOCO_GL=egl is "
+        "picked when unset)",
     )
     p.add_argument(
         "--beyond-hardware-limits",

@@ -138,9 +138,8 @@ def _lines(
     mean: str,
     low: str | None,
     high: str | None,
-    band_std: str | None = None,
 ) -> None:
-    """One line per method with an optional band (columns ``low``/``high`` or mean ± std)."""
+    """One line per method with an optional band between columns ``low`` and ``high``."""
     methods = ordered_methods(summary["method"].unique().tolist())
     colors = method_colors(methods)
     for i, method in enumerate(methods):
@@ -158,9 +157,6 @@ def _lines(
         )
         if low and high:
             ax.fill_between(x, rows[low], rows[high], color=colors[method], alpha=0.15, lw=0)
-        elif band_std:
-            std = rows[band_std].fillna(0).to_numpy(float)
-            ax.fill_between(x, y - std, y + std, color=colors[method], alpha=0.15, lw=0)
     ax.grid(alpha=0.3)
     ax.ticklabel_format(axis="y", useOffset=False)
     ax.set_xlabel(param_label(summary))

@@ -1,4 +1,5 @@
-"""Energy and safety figures with successful and failed episodes apart, mean ± std.
+"""Energy and safety figures with successful and failed episodes apart, mean ± std (the band
+clipped to each cell's smallest and largest value: these quantities cannot be negative).
 
 A failed episode is often cheap (nothing was lifted) and a successful one expensive, so a mean
 over both mixes two populations; each cell is drawn once per outcome, with its spread.
@@ -9,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+import numpy as np
 import pandas as pd
 
 from impact_eval.plots import (
@@ -25,9 +27,20 @@ OUTCOMES = ((True, "successful episodes"), (False, "failed episodes"))
 
 
 def outcome_stats(episodes: pd.DataFrame, column: str) -> pd.DataFrame:
-    """Mean, std and count of ``column`` per (method, param_value, success)."""
+    """Mean, std, count, min and max of ``column`` per (method, param_value, success)."""
     grouped = episodes.groupby(["method", "param_value", "success"])[column]
-    return grouped.agg(["mean", "std", "count"]).reset_index()
+    return grouped.agg(["mean", "std", "count", "min", "max"]).reset_index()
+
+
+def std_band(rows: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """The band drawn around each cell's mean: mean ± std, clipped to the smallest and largest
+    value of the cell. Forces, times and energies cannot be negative, and a mean ± std band
+    of a skewed cell (most episodes 0 N, a few 500 N) would otherwise reach below zero; the
+    clipped band never leaves the values the episodes took."""
+    mean, std = rows["mean"].to_numpy(float), rows["std"].fillna(0.0).to_numpy(float)
+    low = np.maximum(mean - std, rows["min"].to_numpy(float))
+    high = np.minimum(mean + std, rows["max"].to_numpy(float))
+    return low, high
 
 
 def _outcome_lines(ax: plt.Axes, stats: pd.DataFrame, success: bool, methods: list[str]) -> None:
@@ -39,10 +52,9 @@ def _outcome_lines(ax: plt.Axes, stats: pd.DataFrame, success: bool, methods: li
         if rows.empty:
             continue
         x, y = rows["param_value"].to_numpy(float), rows["mean"].to_numpy(float)
-        std = rows["std"].fillna(0.0).to_numpy(float)
         ax.plot(x, y, marker=MARKERS[i % len(MARKERS)], ls=LINESTYLES[i % len(LINESTYLES)],
                 ms=3.5, lw=1.5, color=colors[method], label=method_label(method))
-        ax.fill_between(x, y - std, y + std, color=colors[method], alpha=0.15, lw=0)
+        ax.fill_between(x, *std_band(rows), color=colors[method], alpha=0.15, lw=0)
     ax.grid(alpha=0.3)
 
 
@@ -64,7 +76,8 @@ def _grid(episodes: pd.DataFrame, summary: pd.DataFrame, columns: list[tuple[str
     handles = {h.get_label(): h for ax in axes.flat for h in ax.get_lines()}
     fig.legend(list(handles.values()), list(handles), loc="lower center",
                ncol=min(len(handles), 4), fontsize=8, frameon=False)
-    fig.suptitle(f"{summary['env_id'].iloc[0]}: {title} (mean ± std per cell)", fontsize=10)
+    fig.suptitle(f"{summary['env_id'].iloc[0]}: {title} (mean ± std per cell, the band "
+                 "clipped to the cell's range)", fontsize=10)
     fig.tight_layout(rect=(0, 0.07, 1, 1))
     return fig
 
@@ -91,4 +104,4 @@ def plot_safety(episodes: pd.DataFrame, summary: pd.DataFrame, out_dir: Path,
     return save_figure(fig, out_dir, stem)
 
 
-__all__ = ["outcome_stats", "plot_energy", "plot_safety"]
+__all__ = ["outcome_stats", "plot_energy", "plot_safety", "std_band"]

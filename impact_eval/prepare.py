@@ -195,10 +195,10 @@ def prepare(req: SweepRequest) -> Plan:
                 "1000 Nm/s); pass --beyond-hardware-limits to run it anyway (run.json records it)")
     if req.video_episodes < 0:
         raise InvalidArgumentError(f"--video must be >= 0, got {req.video_episodes}")
-    if req.video_episodes:
-        from impact_eval.video import require_encoder
+    if req.video_episodes:  # an encoder and a GL context, before anything is written
+        from impact_eval.video import require_video
 
-        require_encoder()
+        require_video()
     values = parse_grid(req.grid)
     check_env_id(req.env_id)  # imports the env's module, which may register methods too
     specs = parse_methods(req.methods)

@@ -29,6 +29,17 @@ def require_encoder() -> None:
             "imageio-ffmpeg, or --video 0") from None
 
 
+def require_video() -> None:
+    """Before a sweep writes anything: an MP4 encoder is installed and this machine can render
+    (``impact_envs._gl.check_rendering``: a tiny offscreen render), else one line saying what
+    to install or set. A ``--video`` run used to write its results folder and then fail in
+    every episode on a machine without a GL context."""
+    from impact_envs._gl import check_rendering
+
+    require_encoder()
+    check_rendering()
+
+
 def video_path(root: Path, method: str, param: str, value: str, episode: int) -> Path:
     """``root/<method>/<param>=<value>_ep<episode>.mp4`` (method made file-name safe)."""
     safe = re.sub(r"[^A-Za-z0-9_.=-]+", "_", method).strip("_")

@@ -10,3 +10,5 @@ them from the modules::
     from impact_learn.collect import collect
     from impact_learn.collect_config import CollectConfig
 """
+
+from impact_envs import _gl  # noqa: F401 - the headless GL backend before mujoco loads

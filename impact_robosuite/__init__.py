@@ -5,6 +5,7 @@
 gives a ready composite-controller config for ``robosuite.make(..., controller_configs=...)``.
 """
 
+from impact_envs import _gl  # noqa: F401, I001 - first: the headless GL backend before mujoco loads
 from impact_robosuite.registry import METHODS, controller_config, register
 
 register()

@@ -3,13 +3,19 @@ controller config of ``controller_preset``, the initial task parameters, one-lin
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
+from collections.abc import Mapping
+from typing import TypeVar
 
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import CONTROLLERS
 from impact_envs.control.presets import PRESETS, preset_config, preset_name
+from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.tasks.base import Task
+
+Options = TypeVar("Options", RobotOptions, RenderOptions, ObservationOptions)
 
 REWARD_TYPES = ("sparse", "dense")
 """``"sparse"``: 1.0 on steps where the task is accomplished, else 0.0 (default);
@@ -58,3 +64,46 @@ def initial_params(task: Task, object_mass: float | None,
     for name, value in (task_params or {}).items():
         params[name] = task.param(name).validate(value)
     return params
+
+
+OPTION_ARGUMENTS: dict[str, tuple[type, str | None]] = {
+    "robot": (RobotOptions, None),
+    "render": (RenderOptions, None),
+    "observation": (ObservationOptions, "obs_mode"),
+}
+"""The env's grouped option arguments: their class and the field a plain string sets
+(``observation="rgb"`` is ``ObservationOptions(obs_mode="rgb")``; None: no string form)."""
+
+
+def coerce_options(argument: str, value: object, cls: type[Options]) -> Options:
+    """``value`` as an instance of ``cls``: None gives the defaults, an instance is kept, a
+    mapping gives ``cls(**mapping)`` and, where the argument has one, a string sets its main
+    field. Unknown keys and other types are one-line errors naming the valid ones."""
+    string_field = OPTION_ARGUMENTS[argument][1]
+    fields = [f.name for f in dataclasses.fields(cls)]
+    if value is None:
+        return cls()
+    if isinstance(value, cls):
+        return value
+    if isinstance(value, Mapping):
+        unknown = [k for k in value if k not in fields]
+        if unknown:
+            raise InvalidArgumentError(
+                f"invalid {argument} key(s) {', '.join(map(repr, unknown))}; valid keys of "
+                f"{cls.__name__}: {', '.join(fields)}")
+        return cls(**value)
+    if string_field is not None and isinstance(value, str):
+        return cls(**{string_field: value})
+    forms = f"{cls.__name__}(...) or a dict of its fields ({', '.join(fields)})"
+    if string_field is not None:
+        forms += f" or a {string_field} string"
+    raise InvalidArgumentError(f"invalid {argument} {value!r} ({type(value).__name__}); "
+                               f"valid: {forms}, from impact_envs")
+
+
+def env_options(robot: object, render: object, observation: object
+                ) -> tuple[RobotOptions, RenderOptions, ObservationOptions]:
+    """The env's ``robot``, ``render`` and ``observation`` arguments as option instances."""
+    return (coerce_options("robot", robot, RobotOptions),
+            coerce_options("render", render, RenderOptions),
+            coerce_options("observation", observation, ObservationOptions))

@@ -17,6 +17,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
+from impact_envs._gl import make_renderer
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.internal_model import ModelSnapshot
@@ -24,6 +25,7 @@ from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_fro
 from impact_envs.envs.arguments import (
     check_args,
     controller_config,
+    env_options,
     initial_params,
     load_task,
 )
@@ -64,19 +66,19 @@ class ImpactEnv(gym.Env):
         object_mass: float | None = None,
         task_params: dict[str, float] | None = None,
         controller_preset: str | ControllerConfig = "default",
-        robot: RobotOptions | None = None,
+        robot: RobotOptions | Mapping[str, Any] | None = None,
         persist_internal_model: bool = False,
         terminate_on_success: bool = False,
         render_mode: str | None = None,
-        render: RenderOptions | None = None,
+        render: RenderOptions | Mapping[str, Any] | None = None,
         reward_type: str = "sparse",
-        observation: ObservationOptions | None = None,
+        observation: ObservationOptions | Mapping[str, Any] | str | None = None,
     ) -> None:
         self._init_kwargs = {k: v for k, v in locals().items() if k not in ("self", "__class__")}
         """The constructor's arguments (``__deepcopy__`` and pickling rebuild from them)."""
         check_args(controller, reward_type, controller_preset, render_mode,
                    self.metadata["render_modes"])
-        robot, render = robot or RobotOptions(), render or RenderOptions()
+        robot, render, obs_opts = env_options(robot, render, observation)
         self.reward_type, self.render_mode = reward_type, render_mode
         self.controller_mode = controller
         self.terminate_on_success = bool(terminate_on_success)
@@ -104,7 +106,6 @@ class ImpactEnv(gym.Env):
             dtype=np.float32,
         )
         self._state_space = state_space(self.dynamics, task)
-        obs_opts = observation or ObservationOptions()
         self.observation_options = obs_opts
         """What the observation holds (``ObservationOptions``; ``"state"`` mode by default)."""
         self._pixels = (PixelObservations(self.sim.model, task, obs_opts, self._state_space)
@@ -318,7 +319,7 @@ class ImpactEnv(gym.Env):
             return None
         if self._renderer is None:
             h, w = self._size
-            self._renderer = mujoco.Renderer(self.sim.model, height=h, width=w)
+            self._renderer = make_renderer(self.sim.model, h, w)
         self._renderer.update_scene(self.sim.data, camera=self._camera)
         return self._renderer.render()
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from numbers import Integral, Real
 
 from impact_envs.errors import InvalidArgumentError
+from impact_envs.robot.hand import DEFAULT_GRASP_FORCE_N, check_grasp_force
 
 MAX_RENDER_PX = 4096
 """Largest render width or height [px] (the scenes' offscreen buffer is sized to match)."""
@@ -35,19 +36,20 @@ class RobotOptions:
 
     Attributes:
         sensor_noise: Encoder and joint-torque noise on (docs/sensing.md) or all zero.
-        grasp_force_n: Gripper squeeze force when closing on an object [N].
+        grasp_force_n: Gripper squeeze force when closing on an object [N], above 0 and at
+            most ``MAX_GRASP_FORCE_N`` (140 N, the Franka Hand's quoted peak force).
         model_mass_error: Relative error of the controller's link masses (0: exact model).
     """
 
     sensor_noise: bool = True
-    grasp_force_n: float = 70.0
+    grasp_force_n: float = DEFAULT_GRASP_FORCE_N
     model_mass_error: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.sensor_noise, bool):
             raise InvalidArgumentError(
                 f"invalid sensor_noise {self.sensor_noise!r}; valid: True or False")
-        _real("grasp_force_n", self.grasp_force_n, 0.0, 1000.0, " N")
+        check_grasp_force(self.grasp_force_n)
         _real("model_mass_error", self.model_mass_error, -0.9, 10.0, "")
 
 
@@ -102,6 +104,9 @@ class ObservationOptions:
             raise InvalidArgumentError(
                 f"invalid obs_mode {self.obs_mode!r}; valid choices: {', '.join(OBS_MODES)}")
         cams = self.cameras
+        if isinstance(cams, list):  # e.g. from a dict read from JSON or YAML
+            cams = tuple(cams)
+            object.__setattr__(self, "cameras", cams)
         if (not isinstance(cams, tuple) or not cams or len(set(cams)) != len(cams)
                 or not all(isinstance(c, str) and c for c in cams)):
             raise InvalidArgumentError(

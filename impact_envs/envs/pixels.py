@@ -17,6 +17,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
+from impact_envs._gl import check_rendering, make_renderer
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.tasks.base import Task
@@ -73,6 +74,7 @@ class PixelObservations:
     def __init__(self, model: mujoco.MjModel, task: Task, opts: ObservationOptions,
                  state_space: spaces.Dict) -> None:
         check_view(model, "image size", opts.cameras, opts.image_width, opts.image_height)
+        check_rendering()  # a machine that cannot render fails here, in one line
         self.model, self.cameras = model, opts.cameras
         self.depth = opts.obs_mode == "rgbd"
         self.size = (int(opts.image_height), int(opts.image_width))
@@ -100,7 +102,7 @@ class PixelObservations:
         """One image per camera (and a depth image each in ``"rgbd"``) of ``data`` now."""
         if self._renderer is None:
             h, w = self.size
-            self._renderer = mujoco.Renderer(self.model, height=h, width=w)
+            self._renderer = make_renderer(self.model, h, w)  # no GL: one-line RenderingError
             self._renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.shadows
         renderer, images = self._renderer, {}
         for camera in self.cameras:

@@ -7,8 +7,10 @@ built-in experts are imported on first use; a new task adds its own with ``regis
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from importlib import import_module
+
+import numpy as np
 
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.interface import Policy
@@ -60,3 +62,26 @@ def make_expert(task: str, compensation: str = "none") -> Policy:
         raise InvalidArgumentError(
             f"no scripted expert for task {name!r}; valid: {', '.join(valid)}")
     return factory(compensation)
+
+
+def check_expert_obs(obs: object, keys: Sequence[str], n_envs: int, expert: str) -> None:
+    """One-line ``InvalidArgumentError`` unless ``obs`` is a batched ``Dict`` observation of
+    ``n_envs`` rows holding every entry in ``keys``: a scripted expert reads the object's and
+    the goal's poses, which the image modes (``"rgb"``, ``"rgbd"``) hide from a policy."""
+    if not isinstance(obs, Mapping):
+        raise InvalidArgumentError(
+            f"{expert}.act takes the env's Dict observation batched as {{key: (B, ...)}} "
+            f"(impact_envs.policies.interface.stack_obs), not {type(obs).__name__}")
+    missing = [k for k in keys if k not in obs]
+    if missing:
+        raise InvalidArgumentError(
+            f"{expert} needs the state observation entries {', '.join(missing)}, which this "
+            "observation lacks (the image modes 'rgb' and 'rgbd' hide them); make the env with "
+            "observation=ObservationOptions(obs_mode='state') or 'state+rgb'")
+    for key in keys:
+        shape = np.shape(obs[key])
+        if len(shape) < 2 or shape[0] != n_envs:
+            raise InvalidArgumentError(
+                f"{expert}.act: observation {key!r} has shape {shape}; valid: a batch of "
+                f"reset(n_envs)'s {n_envs} rows, (B, ...) with B = {n_envs} "
+                "(impact_envs.policies.interface.stack_obs([obs]) for one env)")

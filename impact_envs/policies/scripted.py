@@ -29,6 +29,7 @@ import numpy as np
 
 from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
 from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_envs.policies.experts import check_expert_obs
 from impact_envs.rates import POLICY_HZ
 
 GRAVITY = 9.81
@@ -127,6 +128,10 @@ def expert_masses(compensation: str, n_envs: int,
 class PickPlaceExpert:
     """Batched closed-loop pick-and-place expert implementing the Policy protocol."""
 
+    required_observations = ("ee_pos", "ee_rot6d", "gripper_width", "object_pos",
+                             "object_rot6d", "goal_pos")
+    """The state entries it reads (``experts.check_expert_obs``: one line when any is absent)."""
+
     def __init__(self, spec: PickPlaceSpec, compensation: str = "none") -> None:
         check_choice("compensation", compensation, COMPENSATIONS)
         self.spec = spec
@@ -150,6 +155,7 @@ class PickPlaceExpert:
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Actions (B, 10): TCP target position, rot6d, gripper."""
+        check_expert_obs(obs, self.required_observations, self.n, type(self).__name__)
         out = np.zeros((self.n, 10), dtype=np.float32)
         for i in range(self.n):
             o = {k: np.asarray(v[i], dtype=float) for k, v in obs.items()}

@@ -22,6 +22,7 @@ import numpy as np
 
 from impact_envs.control.lie import rot6d_from_matrix
 from impact_envs.errors import InvalidArgumentError
+from impact_envs.policies.experts import check_expert_obs
 from impact_envs.rates import POLICY_HZ
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])
@@ -43,6 +44,8 @@ class CalligraphyExpert:
     ki_per_s = 12.0
     """Integral gain of the tangential tip correction [1/s]."""
     max_correction_m = 0.03
+    required_observations = ("ee_pos", "goal_pos", "object_pos")
+    """The state entries it reads (``experts.check_expert_obs``: one line when any is absent)."""
 
     def __init__(self, tip_offset_m: float, surface_z: float, speed_m_s: float = 0.25) -> None:
         self.tip_offset_m = float(tip_offset_m)
@@ -59,6 +62,7 @@ class CalligraphyExpert:
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Actions (B, 10): TCP target position [m], rot6d (pointing down), gripper closed."""
+        check_expert_obs(obs, self.required_observations, self.n, type(self).__name__)
         out = np.zeros((self.n, 10), dtype=np.float32)
         rot6d = rot6d_from_matrix(R_DOWN)
         max_step = self.speed_m_s / POLICY_HZ

@@ -16,6 +16,7 @@ import numpy as np
 
 from impact_envs.errors import InvalidArgumentError, SimulationError
 from impact_envs.robot.dynamics import ARM_JOINTS, FINGER_JOINTS
+from impact_envs.robot.hand import check_grasp_force
 from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.scene import load_scene
 from impact_envs.robot.sim_kernels import (
@@ -166,8 +167,7 @@ class FrankaSim:
 
     def set_grasp_force(self, force_n: float) -> None:
         """Set the gripper squeeze force [N] (the tendon carries each finger at coef 0.5)."""
-        if not 0.0 < force_n <= 200.0:
-            raise InvalidArgumentError(f"grasp_force_n must be in (0, 200] N, got {force_n}")
+        check_grasp_force(force_n)
         self.model.actuator_forcerange[self.gripper_act] = (-2.0 * force_n, 2.0 * force_n)
 
     # ----------------------------------------------------------------- state

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from fixtures.eval_fake import ENV_ID, FakePolicy
 
+from impact_envs import ObservationOptions
 from impact_envs.errors import InvalidArgumentError
 from impact_eval import evaluate
 from impact_eval.api import EvaluationError
@@ -62,6 +63,13 @@ CASES: dict[str, tuple[dict[str, object], str]] = {
     "env_id unknown": ({"env_id": "IMPACT/Nope-v0"}, "valid choices"),
     "env_id not a string": ({"env_id": 5}, "invalid env_id 5"),
     "param unknown": ({"param": "friction"}, "valid choices: object_mass"),
+    "observation unknown key": ({"observation": {"mode": "rgb"}},
+                                "invalid observation key(s) 'mode'; valid keys"),
+    "observation a number": ({"observation": 3}, "invalid observation 3 (int)"),
+    "observation a list": ({"observation": ["rgb"]}, "invalid observation ['rgb'] (list)"),
+    "observation bad mode": ({"observation": "depth"}, "invalid obs_mode 'depth'"),
+    "observation bad camera size": ({"observation": {"obs_mode": "rgb", "image_width": 0}},
+                                    "invalid image_width 0"),
 }
 
 
@@ -140,3 +148,87 @@ def test_an_interrupted_evaluate_resumes_to_the_same_bytes(tmp_path: Path) -> No
     evaluate(**args, out=tmp_path / "cut", resume=True)
     assert (tmp_path / "cut" / "episodes.csv").read_bytes() == (
         tmp_path / "full" / "episodes.csv").read_bytes()
+
+
+HAMMER = "IMPACT/Hammer-v0"
+
+
+def _checkpoint(variant: str):
+    from impact_envs.policies.diffusion.policy import DiffusionPolicy
+    from impact_eval.methods import checkpoint_dir
+
+    return DiffusionPolicy.load(checkpoint_dir(HAMMER, variant))
+
+
+def _refused_before_writing(tmp_path: Path, error: type, match: str, **kwargs) -> str:
+    out = tmp_path / "out"
+    with pytest.raises(error) as info:
+        evaluate(env_id=HAMMER, values=[2.5], out=out, episodes=1, **kwargs)
+    assert not out.exists() and "\n" not in str(info.value)
+    assert match in str(info.value)
+    return str(info.value)
+
+
+def test_camera_checkpoint_on_a_state_env_says_it_needs_images(tmp_path: Path) -> None:
+    """It used to write a full results folder and raise "every episode raised"."""
+    from impact_envs.errors import CheckpointError
+
+    policy = _checkpoint("vanilla_rgb")
+    message = _refused_before_writing(tmp_path, CheckpointError, "needs camera images",
+                                      policy=policy)
+    assert "observation=" in message
+    _refused_before_writing(tmp_path, CheckpointError, "needs camera images",
+                            policy=lambda env_id, env: policy)  # a factory, held out
+
+
+def test_state_checkpoint_on_an_image_env_names_the_hidden_entry(tmp_path: Path) -> None:
+    from impact_envs.errors import CheckpointError
+
+    _refused_before_writing(tmp_path, CheckpointError, "needs observation 'object_pos'",
+                            policy=_checkpoint("vanilla"),
+                            observation={"obs_mode": "rgb", "image_width": 16,
+                                         "image_height": 16})
+
+
+def test_scripted_expert_on_an_image_env_is_refused_before_writing(tmp_path: Path) -> None:
+    from impact_envs.policies.experts import make_expert
+
+    _refused_before_writing(tmp_path, InvalidArgumentError,
+                            "needs the observation entries object_pos, object_rot6d, goal_pos",
+                            policy=make_expert(HAMMER),
+                            observation=ObservationOptions(obs_mode="rgbd", cameras=("side",),
+                                                           image_width=16, image_height=16))
+
+
+def test_camera_checkpoint_fits_the_env_it_was_trained_for() -> None:
+    """The positive side of the same check: the methods' RGB observation passes it."""
+    import gymnasium as gym
+
+    from impact_eval.api import check_fits_env
+    from impact_eval.methods import RGB_OBSERVATION
+
+    env = gym.make(HAMMER, observation=RGB_OBSERVATION)
+    try:
+        check_fits_env(_checkpoint("vanilla_rgb"), HAMMER, env)
+    finally:
+        env.close()
+
+
+def test_cli_camera_checkpoint_as_a_state_method_exits_2_before_writing(
+        tmp_path: Path, capsys, monkeypatch) -> None:
+    """Same class through impact-eval: a checkpoint root whose hammer/vanilla is a camera
+    checkpoint, run as vanilla_dp (state observation)."""
+    import shutil
+
+    from impact_eval.cli import main
+    from impact_eval.methods import CHECKPOINTS_ENV_VAR, checkpoint_dir
+
+    root = tmp_path / "checkpoints"
+    shutil.copytree(checkpoint_dir(HAMMER, "vanilla_rgb"), root / "hammer" / "vanilla")
+    monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(root))
+    out = tmp_path / "out"
+    code = main(["--env", HAMMER, "--method", "vanilla_dp", "--masses", "2.5", "--episodes",
+                 "1", "--workers", "1", "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "needs camera images" in err[0]
+    assert not out.exists()
