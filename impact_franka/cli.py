@@ -119,6 +119,9 @@ def _add_common_arguments(p: argparse.ArgumentParser, name: str) -> None:
                    "whose tau_J leaves gravity out, e.g. franka-sim)")
     p.add_argument("--recover", action="store_true",
                    help="call automatic_error_recovery if the robot reports errors")
+    p.add_argument("--budget-ms", metavar="MS", type=number(0.05, 10.0), default=1e3 * BUDGET_S,
+                   help="per-tick compute budget [ms], 0.05 to 10: over it on 3 ticks in a "
+                   "row, the loop ramps out and stops (keep the default on a robot)")
 
 
 def _robot_preset(text: str) -> str:
@@ -145,9 +148,6 @@ def _add_run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", type=checks.path, default=None,
                    help="write DIR/ticks.csv (one row per tick) and DIR/run.json (DIR: new or "
                    "empty)")
-    p.add_argument("--budget-ms", metavar="MS", type=number(0.05, 10.0), default=1e3 * BUDGET_S,
-                   help="per-tick compute budget [ms], 0.05 to 10: over it on 3 ticks in a "
-                   "row, the loop ramps out and stops (keep the default on a robot)")
 
 
 def _add_pick_place_arguments(p: argparse.ArgumentParser) -> None:

@@ -10,7 +10,6 @@ import sys
 from impact_franka import checks, session
 from impact_franka.connection import client_lock
 from impact_franka.pick_place import Pose
-from impact_franka.runner import BUDGET_S
 
 
 def run(args: argparse.Namespace) -> int:
@@ -41,7 +40,7 @@ def _run_connected(args: argparse.Namespace, targets: dict[str, Pose]) -> int:
         step = None if step_m is None else TargetStep(np.array(step_m), args.step_at_s)
         report = hold(robot, controller, args.seconds, float_only=args.command == "check",
                       torque_source=args.torque_source, step=step,
-                      budget_s=1e-3 * getattr(args, "budget_ms", 1e3 * BUDGET_S))
+                      budget_s=1e-3 * args.budget_ms)
     session.print_report(report)
     if report.stopped_by_signal:
         print("  stopped early on SIGINT/SIGTERM (ramped out, then finished the motion)")
@@ -82,7 +81,8 @@ def _teach(args: argparse.Namespace, robot: object, controller: object) -> int:
     from impact_franka.runner import hold
 
     if args.float_seconds > 0:
-        report = hold(robot, controller, args.float_seconds, float_only=True)
+        report = hold(robot, controller, args.float_seconds, float_only=True,
+                      budget_s=1e-3 * args.budget_ms)
         if report.stop_reason == "reflex":
             print(f"impact-robot: the robot stopped the motion: {report.robot_message}",
                   file=sys.stderr)

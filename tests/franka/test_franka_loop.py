@@ -14,7 +14,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from franka_servers import port_open
+from franka_servers import SIM_BUDGET, SIM_BUDGET_MS, port_open
 
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_franka.fci import (
@@ -83,7 +83,7 @@ def test_franka_sim_hold_with_the_robot_s_checks_on(franka_sim, capsys) -> None:
     (its tau_J echoes the command, without gravity: --torque-source tau_J+g)."""
     from impact_franka.cli import main
 
-    assert main(["check", "--host", franka_sim, "--seconds", "1"]) == 0
+    assert main(["check", *SIM_BUDGET, "--host", franka_sim, "--seconds", "1"]) == 0
     out = capsys.readouterr().out
     # franka-sim's end effector is the flange (F_T_EE = identity), 0.21 m from our TCP
     assert "robot errors: none" in out and "MODEL MISMATCH: jacobian" in out
@@ -126,7 +126,8 @@ def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim_no_fri
         return original(*args, **kwargs)
 
     monkeypatch.setattr(runner, "hold", marked_hold)
-    code = main(["hold", "--host", franka_sim_no_friction, "--seconds", "30", "--torque-source",
+    code = main(["hold", *SIM_BUDGET,
+                 "--host", franka_sim_no_friction, "--seconds", "30", "--torque-source",
                  "tau_J+g", "--step-m", "0,0,-0.05", "--step-at-s", "10", "--out", str(out)])
     assert code == 0
     import json
@@ -169,7 +170,8 @@ def test_collision_thresholds_leave_room_for_the_undeclared_payload() -> None:
 def test_check_floats_the_arm_and_reports_the_loop(franky_sim, capsys) -> None:
     from impact_franka.cli import main
 
-    assert main(["check", "--host", franky_sim, "--seconds", "1", "--max-payload-kg", "3"]) == 0
+    assert main(["check", *SIM_BUDGET,
+                 "--host", franky_sim, "--seconds", "1", "--max-payload-kg", "3"]) == 0
     out = capsys.readouterr().out
     assert "robot errors: none" in out and "Hz" in out
     assert "collision thresholds for an undeclared 3 kg" in out
@@ -194,7 +196,7 @@ def test_our_model_agrees_with_franka_s(franky_sim) -> None:
 def test_hold_with_franka_s_model_keeps_the_tcp(franky_sim, tmp_path) -> None:
     from impact_franka.cli import main
 
-    assert main(["hold", "--host", franky_sim, "--seconds", "1.5", "--model", "franka",
+    assert main(["hold", *SIM_BUDGET, "--host", franky_sim, "--seconds", "1.5", "--model", "franka",
                  "--out", str(tmp_path)]) == 0
     import json
 
@@ -241,7 +243,8 @@ def test_hold_keeps_the_tcp_with_the_fr3_configuration(franky_sim) -> None:
     from impact_franka.runner import hold
 
     robot = plf.Robot(franky_sim, plf.RealtimeConfig.kIgnore)
-    report = hold(robot, ImpactController(PinocchioArm(), fr3_config(), mode="impact"), 2.0)
+    report = hold(robot, ImpactController(PinocchioArm(), fr3_config(), mode="impact"), 2.0,
+                  budget_s=1e-3 * SIM_BUDGET_MS)
     assert report.robot_errors == ""
     assert report.rate_hz > 300.0  # the simulator serves 790-970 Hz on 2 cores
     assert report.tcp_vs_robot_m < 1e-3  # frames reconciled: our TCP is the robot's O_T_EE
@@ -267,7 +270,8 @@ def test_hold_writes_one_row_per_tick_and_run_json(franky_sim, tmp_path) -> None
     from impact_franka.cli import main
     from impact_franka.runner import TICK_COLUMNS
 
-    assert main(["hold", "--host", franky_sim, "--seconds", "1", "--out", str(tmp_path)]) == 0
+    assert main(["hold", *SIM_BUDGET,
+                 "--host", franky_sim, "--seconds", "1", "--out", str(tmp_path)]) == 0
     ticks = pd.read_csv(tmp_path / "ticks.csv")
     run = json.loads((tmp_path / "run.json").read_text())
     assert tuple(ticks.columns) == TICK_COLUMNS
@@ -301,7 +305,7 @@ def test_sigterm_finishes_the_motion_cleanly(franky_sim) -> None:
     try:
         timer = threading.Timer(1.5, os.kill, (os.getpid(), signal.SIGTERM))
         timer.start()
-        report = hold(robot, controller, 30.0)
+        report = hold(robot, controller, 30.0, budget_s=1e-3 * SIM_BUDGET_MS)
         timer.join()
         assert signal.getsignal(signal.SIGTERM) is net  # the handler before the loop is back
     finally:
@@ -403,7 +407,8 @@ def test_a_reflex_keeps_the_ticks_and_exits_1_naming_it(monkeypatch, tmp_path, c
     monkeypatch.setattr(session, "make_controller", lambda args, r: (
         ImpactController(PinocchioArm(), fr3_config(), mode="impact"), {}))
     out = tmp_path / "run"
-    assert cli.main(["hold", "--host", "127.0.0.1", "--seconds", "5", "--out", str(out)]) == 1
+    assert cli.main(["hold", *SIM_BUDGET,
+                     "--host", "127.0.0.1", "--seconds", "5", "--out", str(out)]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and '["joint_reflex"]' in err and "errors: [joint_reflex]" in err
     import json
@@ -435,7 +440,7 @@ def test_a_policy_runs_at_30_hz_on_the_robot(franky_sim) -> None:
     controller = ImpactController(PinocchioArm(), fr3_config(), mode="impact")
     source = PolicyTarget(functools.partial(CirclePolicy, 0.03, 4.0), None,
                           workspace=(np.array([0.2, -0.4, 0.1]), np.array([0.8, 0.4, 0.8])))
-    report = run_loop(robot, controller, 6.0, source)
+    report = run_loop(robot, controller, 6.0, source, budget_s=1e-3 * SIM_BUDGET_MS)
     assert report.robot_errors == "" and source.refused == 0
     assert source.actions >= 0.9 * 30 * 6.0  # 30 Hz in robot time
     moving = report.ticks_table[report.ticks_table["t_s"] > 1.0]

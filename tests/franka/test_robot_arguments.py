@@ -31,6 +31,8 @@ PICK_PLACE = ["pick-place", *HOST, "--pick", "0.5,-0.1,0.3", "--place", "0.5,0.1
     (["hold", *HOST, "--max-payload-kg", "-1"], "--max-payload-kg"),
     (["check", *HOST, "--max-payload-kg", "inf"], "--max-payload-kg"),
     (["hold", *HOST, "--budget-ms", "0"], "--budget-ms"),
+    (["check", *HOST, "--budget-ms", "11"], "--budget-ms"),
+    (["teach", *HOST, "--poses", "p.json", "--name", "a", "--budget-ms", "nan"], "--budget-ms"),
     (["check", *HOST, "--connect-timeout-s", "0"], "--connect-timeout-s"),
     (["check", *HOST, "--connect-timeout-s", "nan"], "--connect-timeout-s"),
     (["teach", *HOST, "--poses", "p.json", "--name", ""], "--name: invalid name ''"),
