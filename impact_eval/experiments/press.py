@@ -1,18 +1,25 @@
-"""Press experiment: a closed hand pushed into a rigid plate and held there (issue 26).
+"""Press experiment: a closed hand pushed into a rigid plate and held there (issue 26), and a
+grasped load set down on a table (issue 37 item 4, ``press_setdown.py``).
 
-Run ``python -m impact_eval.experiments.press --out results/press``. The plate (press_scene.xml)
+Run ``python -m impact_eval.experiments.press --out results/press`` (both scenarios;
+``--scenario plate`` or ``setdown`` for one). The plate (press_scene.xml)
 is tilted by each ``--angles`` [deg] about the world y axis (0: a table top, 90: a wall in front
 of the hand) with its surface 30 mm from the TCP along its normal. The TCP target moves in 1 s
 along the inward normal to ``--depths`` [mm] below the surface and stays there for
-``--hold-s`` seconds; the hand cannot follow, so the impedance law presses with about
-K x depth. Reported per mode: the steady contact force (mean of the last second), its growth
-from 2 s after arrival to the end, and the largest predicted force [N]. Acceptance (issue 26):
-with the contact guard (``impact``), steady force <= impedance's + 3 N, growth <= 0.5 N,
-prediction bounded.
+``--hold-s`` seconds (8 by default); the hand cannot follow, so the impedance law presses with
+about K x depth. Reported per mode: the steady contact force (mean of the last second), its
+growth from 2 s after arrival to the end, and the largest predicted force [N] (``press.csv``).
+Acceptance (issue 26): with the contact guard (``impact``), steady force <= impedance's + 3 N,
+growth <= 0.5 N, prediction bounded. The set-down (``setdown.csv``, flags ``--loads-kg``,
+``--setdown-depths``, ``--traces``; hold 6 s by default) is described in ``press_setdown.py``.
 
 Modes: ``impedance``; ``impact`` (the ``default`` preset as shipped, contact guard on);
-``impact_unguarded`` (``default`` with ``guard.enabled=False``); ``paper``. Sensor noise on,
-seed ``--seed``.
+``impact_unguarded`` (``default`` with ``guard.enabled=False``); ``paper``; ``authors_sim``
+(the authors' controller as their simulation runs it, the preset as shipped: gravity is
+compensated by the controller, as in every mode here, and its torque-rate limit acts on the
+command with gravity, starting from 0 at reset; the plate's ``max_pred_n`` is the internal
+model's prediction, 0 here: its feedforward is the payload stage's). Sensor noise on, seed
+``--seed``.
 """
 
 from __future__ import annotations
@@ -26,20 +33,26 @@ import mujoco
 import numpy as np
 import pandas as pd
 
+from impact_envs.cli import OneLineParser
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.presets import preset_config
+from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import control_tick
 from impact_envs.robot.ik import HOME_Q
 from impact_eval.experiments.physics import Rig
 
-MODES = ("impedance", "impact", "impact_unguarded", "paper")
+MODES = ("impedance", "impact", "impact_unguarded", "paper", "authors_sim")
+SCENARIOS = ("both", "plate", "setdown")
+TRACES = ("failing", "impact", "all", "none")
+"""``--traces``: whose set-down traces are written (``press_setdown.wants_trace``)."""
 GAP_M, APPROACH_S, PLATE_HALF_THICKNESS_M = 0.03, 1.0, 0.02
 
 
 def mode_controller(mode: str) -> tuple[str, ControllerConfig]:
-    """(controller mode, config) of a press mode."""
-    base = preset_config("paper" if mode == "paper" else "default")
+    """(controller mode, config) of a press mode: its preset as shipped (``authors_sim``
+    without an estimator argument: it runs the authors' observer)."""
+    base = preset_config(mode if mode in ("paper", "authors_sim") else "default")
     if mode == "impact_unguarded":
         base = replace(base, guard=replace(base.guard, enabled=False))
     return ("impedance" if mode == "impedance" else "impact"), base
@@ -86,24 +99,73 @@ def press(mode: str, angle_deg: float, depth_m: float, hold_s: float, seed: int)
             "holds": rig.controller.guard.holds_started}
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def _floats(text: str, flag: str, lo: float, hi: float, unit: str) -> list[float]:
+    """The comma-separated numbers of ``flag``, each in (lo, hi]; else ValueError naming the
+    valid values."""
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(lo < v <= hi for v in values):
+        raise ValueError(f"invalid {flag} {text!r}; valid: comma-separated numbers in "
+                         f"({lo:g}, {hi:g}] {unit}")
+    return values
+
+
+def _modes(values: list[str]) -> list[str]:
+    """``--modes`` (space- or comma-separated) checked against ``MODES``."""
+    modes = [m for v in values for m in v.split(",") if m]
+    bad = [m for m in modes if m not in MODES]
+    if bad or not modes:
+        raise ValueError(f"invalid --modes {' '.join(values)!r}; valid: {', '.join(MODES)}")
+    return modes
+
+
+def _parser() -> OneLineParser:
+    parser = OneLineParser(prog="press", description=__doc__.splitlines()[0])
+    parser.add_argument("--scenario", choices=SCENARIOS, default="both")
     parser.add_argument("--angles", type=float, nargs="+", default=[0.0, 20.0, 40.0, 90.0])
     parser.add_argument("--depths", type=float, nargs="+", default=[10.0, 30.0, 50.0],
-                        help="[mm] below the surface")
-    parser.add_argument("--modes", nargs="+", default=list(MODES), choices=MODES)
-    parser.add_argument("--hold-s", type=float, default=8.0)
+                        help="plate: [mm] below the surface")
+    parser.add_argument("--loads-kg", default="3,6", help="set-down: loads [kg], e.g. 3,6")
+    parser.add_argument("--setdown-depths", default="15,30",
+                        help="set-down: [mm] below the table contact, e.g. 15,30")
+    parser.add_argument("--modes", nargs="+", default=list(MODES), help=", ".join(MODES))
+    parser.add_argument("--hold-s", type=float, default=None,
+                        help="hold [s] (default: plate 8, set-down 6)")
+    parser.add_argument("--traces", choices=TRACES, default="failing",
+                        help="set-down traces written to OUT/setdown_traces: failing (impact "
+                             "above impedance + 3 N), impact, all, none")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=None)
-    args = parser.parse_args(argv)
-    if not (args.hold_s >= 3.0 and all(d > 0 for d in args.depths)):
-        parser.error(f"--hold-s {args.hold_s}, --depths {args.depths}: valid: hold >= 3 s "
-                     "(growth is read from 2-3 s), depths > 0 mm")
+    return parser
+
+
+def _check(parser: OneLineParser, args: argparse.Namespace) -> None:
+    """Parse the list flags in place; one line naming the valid values on a bad one."""
+    try:
+        args.modes = _modes(args.modes)
+        args.loads_kg = _floats(args.loads_kg, "--loads-kg", 0.0, 10.0, "kg")
+        args.setdown_depths = _floats(args.setdown_depths, "--setdown-depths", 0.0, 100.0, "mm")
+    except ValueError as exc:
+        parser.fail(exc)
+    plate, setdown = args.scenario != "setdown", args.scenario != "plate"
+    if plate and not (args.hold_s is None or args.hold_s >= 3.0):
+        parser.fail(f"invalid --hold-s {args.hold_s}; valid: >= 3 s for the plate (growth is "
+                    "read from 2-3 s)")
+    if setdown and not (args.hold_s is None or 2.0 <= args.hold_s <= 60.0):
+        parser.fail(f"invalid --hold-s {args.hold_s}; valid: 2 to 60 s for the set-down")
+    if plate and not all(d > 0 for d in args.depths):
+        parser.fail(f"invalid --depths {args.depths}; valid: depths > 0 mm")
+
+
+def run_plate(args: argparse.Namespace, hold_s: float) -> None:
+    """The plate presses of ``args``; ``press.csv`` under ``args.out``."""
     rows = []
     for angle in args.angles:
         for depth in args.depths:
             for mode in args.modes:
-                rows.append(press(mode, angle, depth * 1e-3, args.hold_s, args.seed))
+                rows.append(press(mode, angle, depth * 1e-3, hold_s, args.seed))
                 r = rows[-1]
                 print(f"{mode:13s} {angle:4.0f} deg {depth:4.0f} mm: steady "
                       f"{r['steady_force_n']:7.1f} N growth {r['growth_after_2s_n']:+6.2f} N "
@@ -118,6 +180,23 @@ def main(argv: list[str] | None = None) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
         df.to_csv(args.out / "press.csv", index=False, float_format="%.3f")
     print(df.to_string(index=False, float_format=lambda v: f"{v:.1f}"))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    _check(parser, args)
+    if args.scenario != "setdown":
+        run_plate(args, 8.0 if args.hold_s is None else args.hold_s)
+    if args.scenario != "plate":
+        from impact_eval.experiments.press_setdown import run_setdown  # imports this module
+
+        try:
+            df = run_setdown(args.out, args.modes, args.loads_kg, args.setdown_depths,
+                             6.0 if args.hold_s is None else args.hold_s, args.seed, args.traces)
+        except InvalidArgumentError as exc:
+            parser.fail(exc)
+        print(df.to_string(index=False, float_format=lambda v: f"{v:.1f}"))
     return 0
 
 
