@@ -16,7 +16,7 @@ from pathlib import Path
 
 from impact_envs.errors import InvalidArgumentError
 from impact_eval.grid import format_value
-from impact_eval.metrics import EPISODE_COLUMNS, SUSTAINED_COLUMNS
+from impact_eval.metrics import ADDED_COLUMNS, EPISODE_COLUMNS
 
 EpisodeKey = tuple[str, str, int]
 """``(method, canonical param value text, episode index)``: identifies a row."""
@@ -63,20 +63,24 @@ def repair_tail(path: Path) -> None:
             f.truncate(data.rfind(b"\n") + 1)
 
 
-def read_rows(path: Path) -> list[dict[str, str]]:
+def read_rows(path: Path, older: bool = False) -> list[dict[str, str]]:
     """Rows of an existing ``episodes.csv`` as strings (the file's header must match).
 
     Text after the last newline (a row torn by a crash) is ignored, as are malformed rows.
+    ``older``: a file written by an older impact-eval (``older_columns_missing``) is read
+    as it is, its rows without the columns it lacks (``reproduce`` compares committed tables
+    on their own columns); otherwise such a file is refused (it cannot be resumed).
     """
     text = path.read_text()
     with io.StringIO(text[: text.rfind("\n") + 1], newline="") as f:
         reader = csv.DictReader(f)
         columns = tuple(reader.fieldnames or ())
-        if columns == tuple(c for c in EPISODE_COLUMNS if c not in SUSTAINED_COLUMNS):
+        missing = older_columns_missing(columns)
+        if missing is not None and not older:
             raise InvalidArgumentError(
-                f"{path} was written by an older impact-eval (no {', '.join(SUSTAINED_COLUMNS)}"
-                " columns) and cannot be resumed; run into a new --out directory")
-        if columns != EPISODE_COLUMNS:
+                f"{path} was written by an older impact-eval (no {', '.join(missing)} columns) "
+                "and cannot be resumed; run into a new --out directory")
+        if missing is None and columns != EPISODE_COLUMNS:
             raise InvalidArgumentError(
                 f"{path} is not an impact-eval episodes.csv (columns {reader.fieldnames})"
             )
@@ -84,6 +88,28 @@ def read_rows(path: Path) -> list[dict[str, str]]:
             return [dict(r) for r in reader if _well_formed(r)]
         except csv.Error as exc:
             raise InvalidArgumentError(f"{path} is corrupt: {exc}") from None
+
+
+def file_columns(path: Path) -> tuple[str, ...]:
+    """The header of an ``episodes.csv`` (its first line's column names)."""
+    with path.open(newline="") as f:
+        return tuple(next(csv.reader(f), []))
+
+
+def older_columns_missing(columns: tuple[str, ...]) -> tuple[str, ...] | None:
+    """The columns an older impact-eval did not write yet, when ``columns`` is the header of
+    such a file (``EPISODE_COLUMNS`` less the columns of one or more ``ADDED_COLUMNS``
+    dates, in order); None for any other header."""
+    added = [c for group in ADDED_COLUMNS.values() for c in group]
+    missing = tuple(c for c in EPISODE_COLUMNS if c not in columns)
+    if not missing or not set(missing) <= set(added):
+        return None
+    if columns != tuple(c for c in EPISODE_COLUMNS if c not in missing):
+        return None
+    if not all(set(g) <= set(missing) or not set(g) & set(missing)
+               for g in ADDED_COLUMNS.values()):
+        return None
+    return missing
 
 
 def _well_formed(row: Mapping[str | None, str | None]) -> bool:

@@ -54,9 +54,10 @@ def check_env_id(env_id: str) -> str:
 
 def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
              preset: str = "default", render: bool = False,
-             observation: object | None = None) -> gym.Env:
+             observation: object | None = None, robot: object | None = None) -> gym.Env:
     """``gym.make(env_id, controller=controller, controller_preset=preset)``, errors turned
-    into ``ImpactError``.
+    into ``ImpactError``; ``observation`` and ``robot`` (an ``ObservationOptions``, a
+    ``RobotOptions``) are passed when given.
 
     IMPACT envs end an episode at success (``terminate_on_success=True``): success is then
     final, and a sweep does not spend the remaining steps of solved episodes. ``overrides``
@@ -73,6 +74,8 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
         extra["controller_preset"] = preset
     if observation is not None:
         extra["observation"] = observation  # an ObservationOptions (camera methods)
+    if robot is not None:
+        extra["robot"] = robot  # a RobotOptions (the *_authors methods' torque reading)
     if overrides:
         from impact_envs.control.overrides import apply_overrides
         from impact_envs.control.presets import preset_config
@@ -187,10 +190,11 @@ def precompile_kernels(env: gym.Env) -> None:
 
 def method_env(env_id: str, spec: object, overrides: Sequence[str] = (),
                render: bool = False) -> gym.Env:
-    """``make_env`` for a method: its controller and preset, wrapped in
+    """``make_env`` for a method: its controller, preset, observation and robot, wrapped in
     ``impact_envs.wrappers.RLActions`` when the method acts in one of its modes (an SB3 model
     trained on the wrapper)."""
-    env = make_env(env_id, spec.controller, overrides, spec.preset, render, spec.observation)
+    env = make_env(env_id, spec.controller, overrides, spec.preset, render, spec.observation,
+                   getattr(spec, "robot", None))
     if spec.action_mode is None:
         return env
     from impact_envs.wrappers import RLActions

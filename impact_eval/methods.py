@@ -18,8 +18,14 @@ machinery tested) without the scripted experts, diffusion policies or Stable-Bas
 | `impact_rgb`      | the same checkpoint                      | `impact`    |
 | `impact_rgb_paper` | the same checkpoint                     | `impact`, preset `paper` |
 | `scripted_impact_paper` | scripted expert                    | `impact`, preset `paper` |
+| `impact_authors`  | DP checkpoint `<env>/vanilla`    | `impact`, `authors_sim`, carried (1) |
+| `scripted_impact_authors` | scripted expert          | `impact`, `authors_sim`, carried (1) |
 | `sb3:<path.zip>`  | any SB3 algorithm's policy, deterministic (``sb3.py``) | `impact` |
 | `sb3_impedance:<path.zip>` | the same | `impedance` |
+
+(1) The authors' simulation as they ran it: preset ``authors_sim``, the applied command read as
+the joint torque (``RobotOptions(torque_reading="commanded")``), and the controller state
+carried across the episodes of a cell (``MethodSpec.carry``, ``chain.py``).
 """
 
 from __future__ import annotations
@@ -28,14 +34,14 @@ import contextlib
 import os
 import re
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import gymnasium as gym
 
 from impact_envs.control.controller import CONTROLLERS
 from impact_envs.control.presets import PRESETS
-from impact_envs.envs.options import ObservationOptions
+from impact_envs.envs.options import ObservationOptions, RobotOptions
 from impact_envs.errors import CheckpointError, InvalidArgumentError, check_choice
 from impact_envs.policies.interface import Policy
 from impact_eval.sb3 import load_sb3, sb3_action_mode
@@ -69,12 +75,41 @@ class MethodSpec:
     """``impact_envs.wrappers.RLActions`` mode the policy acts in (None: the env's own)."""
     observation: ObservationOptions | None = None
     """What the env observes (``gym.make(..., observation=...)``); None: the state."""
+    robot: RobotOptions | None = None
+    """The simulated robot (``gym.make(..., robot=...)``, e.g. its torque reading); None: the
+    env's default."""
+    carry: bool = False
+    """Run each (method, value) cell as one chain of episodes on one env, each episode
+    starting with the controller state the previous one left (the authors' benchmark, their
+    controller activated once per bin; ``chain.py``, docs/eval.md "Carried controller
+    state"). Excludes ``warm``."""
+
+    def __post_init__(self) -> None:
+        if self.carry and self.warm:
+            raise InvalidArgumentError(
+                f"method {self.name!r}: carry and warm exclude each other (a carried chain "
+                "already starts each episode from the internal model the previous one left); "
+                "choose one")
 
     @property
-    def env_key(self) -> tuple[str, str, str | None, ObservationOptions | None]:
-        """(controller, preset, action mode, observation): methods with equal keys can share
-        envs."""
-        return self.controller, self.preset, self.action_mode, self.observation
+    def env_key(self) -> tuple[str, str, str | None, ObservationOptions | None,
+                               RobotOptions | None]:
+        """(controller, preset, action mode, observation, robot): methods with equal keys can
+        share envs."""
+        return self.controller, self.preset, self.action_mode, self.observation, self.robot
+
+    @property
+    def settings(self) -> dict[str, object]:
+        """What ``run.json`` and ``identity.json`` record per method (``args.method_controllers``)
+        and ``--resume`` compares: controller, preset, warm; ``carry`` and ``robot`` only where
+        set, so that the records of runs made before they existed still match."""
+        out: dict[str, object] = {"controller": self.controller, "preset": self.preset,
+                                  "warm": self.warm}
+        if self.carry:
+            out["carry"] = True
+        if self.robot is not None:
+            out["robot"] = asdict(self.robot)
+        return out
 
 
 _REGISTRY: dict[str, MethodSpec] = {}
@@ -207,6 +242,10 @@ RGB_OBSERVATION = ObservationOptions(obs_mode="rgb", cameras=("overview", "wrist
 """Observation of the ``*_rgb`` methods: the two cameras the shipped visuomotor checkpoint was
 trained on, 96 x 96, without shadows (docs/diffusion_policy.md, "Visuomotor policy")."""
 
+AUTHORS_ROBOT = RobotOptions(torque_reading="commanded")
+"""The robot of the ``*_authors`` methods: the controller reads the applied command as the joint
+torque, as the authors' simulation does (``qfrc_actuator``, noise-free)."""
+
 
 for _spec in (
     MethodSpec("scripted", "impedance", _build_scripted, "scripted expert, impedance control"),
@@ -227,6 +266,13 @@ for _spec in (
                "Vanilla DP + IMPACT controller, paper preset", preset="paper"),
     MethodSpec("impact_warm", "impact", _build_impact_dp,
                "Vanilla DP + IMPACT controller, internal model warmed up on the cell", warm=True),
+    MethodSpec("impact_authors", "impact", _dp_factory("vanilla"),
+               "Vanilla DP + the authors' IMPACT controller as their simulation runs it (preset "
+               "authors_sim, commanded torque reading, state carried across a cell's episodes)",
+               preset="authors_sim", robot=AUTHORS_ROBOT, carry=True),
+    MethodSpec("scripted_impact_authors", "impact", _build_scripted,
+               "scripted expert + the authors' IMPACT controller as their simulation runs it",
+               preset="authors_sim", robot=AUTHORS_ROBOT, carry=True),
     MethodSpec("vanilla_dp_rgb", "impedance", _dp_factory("vanilla_rgb"),
                "visuomotor Vanilla DP (cameras + the robot's own state), impedance",
                observation=RGB_OBSERVATION),

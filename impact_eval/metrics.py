@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from impact_eval.safety import scene_contact, sustained_contact
+from impact_eval.safety import scene_contact, sustained_contact, sustained_peak
 
 EPISODE_COLUMNS: tuple[str, ...] = (
     "method",
@@ -24,16 +24,39 @@ EPISODE_COLUMNS: tuple[str, ...] = (
     "energy_j",
     "peak_torque_nm",
     "peak_contact_force_n",
+    "peak_contact_sustained_n",
     "contact_p95_n",
     "contact_over_10n_s",
     "contact_over_20n_s",
     "mean_pose_error_m",
+    "drawn_mass_kg",
+    "robot_profile",
     "failure_reason",
 )
 """Columns of ``episodes.csv``, in file order. No wall-clock values (the file is deterministic)."""
 
 SUSTAINED_COLUMNS: tuple[str, ...] = ("contact_p95_n", "contact_over_10n_s", "contact_over_20n_s")
 """The sustained-contact columns (``safety.sustained_contact``), added on 2026-11-26."""
+
+SUSTAINED_PEAK_COLUMN = "peak_contact_sustained_n"
+"""The safety measure of the summaries and plots (``safety.sustained_peak``)."""
+
+EPISODE_INFO_COLUMNS: tuple[str, ...] = ("drawn_mass_kg", "robot_profile")
+"""What the env used in the episode, as its ``info`` reports it: ``drawn_mass_kg`` from
+``info["object_mass"]`` (the manipulated object's mass the env set for the episode [kg]; NaN
+when the env reports none) and ``robot_profile`` from ``info["robot_profile"]`` (the simulated
+robot's profile, ``"ideal"`` for every IMPACT env today; ``""`` when the env reports none)."""
+
+DRAWN_MASS_INFO_KEY = "object_mass"
+ROBOT_PROFILE_INFO_KEY = "robot_profile"
+
+ADDED_COLUMNS: dict[str, tuple[str, ...]] = {
+    "2026-11-26": SUSTAINED_COLUMNS,
+    "2026-11-27": (SUSTAINED_PEAK_COLUMN, *EPISODE_INFO_COLUMNS),
+}
+"""Columns added to ``episodes.csv`` after its first version, by date: a file without them was
+written by an older impact-eval (``csvio.read_rows`` refuses to resume it; the report reads a
+file lacking only the newest ones, ``report.OPTIONAL_COLUMNS``)."""
 
 Z_95 = 1.959963984540054
 """Two-sided 95 % standard-normal quantile."""
@@ -100,14 +123,32 @@ class EpisodeTracker:
     _pose_error: list[float] = field(default_factory=list)
     _contact: list[np.ndarray] = field(default_factory=list)
     _contact_dt: float = math.nan
+    _drawn_mass: float = math.nan
+    _robot_profile: str = ""
 
     @property
     def done(self) -> bool:
         """True once the episode ended (``finish`` was called)."""
         return self.failure_reason is not None
 
+    def start(self, info: object) -> None:
+        """Record the ``info`` of the episode's ``reset`` (the mass and robot profile the env
+        set up: an episode that crashes before its first step still reports them); anything
+        but a mapping is ignored."""
+        if isinstance(info, Mapping):
+            self._note_setup(info)
+
+    def _note_setup(self, info: Mapping[str, object]) -> None:
+        """Keep the latest ``EPISODE_INFO_COLUMNS`` values ``info`` reports."""
+        if DRAWN_MASS_INFO_KEY in info:
+            mass = _reduce(info[DRAWN_MASS_INFO_KEY], "max")
+            self._drawn_mass = math.nan if mass is None else mass
+        if ROBOT_PROFILE_INFO_KEY in info:
+            self._robot_profile = one_line(str(info[ROBOT_PROFILE_INFO_KEY]))
+
     def update(self, info: Mapping[str, object]) -> None:
         """Record the ``info`` of one env step."""
+        self._note_setup(info)
         self.length += 1
         self.success = bool(info.get("is_success", False))
         if self.success and self.first_success_step is None:
@@ -154,12 +195,17 @@ class EpisodeTracker:
             ),
             **self._sustained(),
             "mean_pose_error_m": float(np.mean(self._pose_error)) if self._pose_error else math.nan,
+            "drawn_mass_kg": self._drawn_mass,
+            "robot_profile": self._robot_profile,
             "failure_reason": self.failure_reason,
         }
 
     def _sustained(self) -> dict[str, float]:
-        """``contact_p95_n`` and ``contact_over_*`` of the episode's per-tick contact trace
-        (``safety.sustained_contact``); NaN when the env gives no trace."""
+        """``peak_contact_sustained_n``, ``contact_p95_n`` and ``contact_over_*`` of the
+        episode's per-tick contact trace (``safety.sustained_peak``, ``sustained_contact``);
+        NaN when the env gives no trace."""
         if not self._contact:
-            return dict.fromkeys(SUSTAINED_COLUMNS, math.nan)
-        return sustained_contact(np.concatenate(self._contact), self._contact_dt)
+            return dict.fromkeys((SUSTAINED_PEAK_COLUMN, *SUSTAINED_COLUMNS), math.nan)
+        trace = np.concatenate(self._contact)
+        return {SUSTAINED_PEAK_COLUMN: sustained_peak(trace, self._contact_dt),
+                **sustained_contact(trace, self._contact_dt)}

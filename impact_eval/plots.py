@@ -4,8 +4,8 @@
    (the layout of the paper's simulation-benchmark figure).
 2. ``success_vs_<param>``: success rate with Wilson 95 % bands, one line per method.
 3. ``energy_vs_<param>``: joint mechanical energy per episode, mean ± std.
-4. ``safety_vs_<param>``: peak contact force, sustained contact (p95, time above 20 N), peak
-   joint torque, means.
+4. ``safety_vs_<param>``: sustained peak contact force (held 50 ms), sustained contact (p95,
+   time above 20 N), peak joint torque, means (``plots_outcome.plot_safety``).
 """
 
 from __future__ import annotations
@@ -32,6 +32,8 @@ METHOD_LABELS = {
     "impact_paper": "IMPACT, paper preset",
     "impact_vanilla": "IMPACT, Vanilla ckpt",
     "scripted_impact_paper": "Scripted + IMPACT (paper)",
+    "impact_authors": "IMPACT, authors' controller",
+    "scripted_impact_authors": "Scripted + authors' IMPACT",
 }
 FORMATS = ("png", "pdf")
 MARKERS = ("o", "s", "^", "D", "v", "P", "X")

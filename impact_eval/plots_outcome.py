@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from impact_eval.metrics import SUSTAINED_PEAK_COLUMN
 from impact_eval.plots import (
     LINESTYLES,
     MARKERS,
@@ -22,6 +23,7 @@ from impact_eval.plots import (
     param_label,
     save_figure,
 )
+from impact_eval.safety import SUSTAINED_PEAK_WINDOW_S
 
 OUTCOMES = ((True, "successful episodes"), (False, "failed episodes"))
 
@@ -92,11 +94,15 @@ def plot_energy(episodes: pd.DataFrame, summary: pd.DataFrame, out_dir: Path,
 
 def plot_safety(episodes: pd.DataFrame, summary: pd.DataFrame, out_dir: Path,
                 stem: str) -> list[Path]:
-    """Peak contact force, the sustained-contact measures (95th percentile of the contact
-    force, time above libfranka's example threshold of 20 N) and peak joint torque,
-    successful and failed episodes apart. Tables written before the sustained columns
-    existed get the peak panels only."""
-    columns = [("peak_contact_force_n", "peak contact force [N]"),
+    """Sustained peak contact force (``safety.sustained_peak``: the highest force held for
+    50 ms), the sustained-contact measures (95th percentile of the contact force, time above
+    libfranka's example threshold of 20 N) and peak joint torque, successful and failed
+    episodes apart.
+    The raw peak contact force (one instant, a few-ms impact spike) stays in episodes.csv and
+    summary.csv only. Tables written before a column existed get its panel left out; one
+    without the sustained peak (before 2026-11-27) gets the raw peak in its place, so
+    labelled."""
+    columns = [safety_peak_column(episodes),
                ("contact_p95_n", "contact force, 95th percentile [N]"),
                ("contact_over_20n_s", "time above 20 N [s]"),
                ("peak_torque_nm", "peak joint torque [Nm]")]
@@ -104,4 +110,14 @@ def plot_safety(episodes: pd.DataFrame, summary: pd.DataFrame, out_dir: Path,
     return save_figure(fig, out_dir, stem)
 
 
-__all__ = ["outcome_stats", "plot_energy", "plot_safety", "std_band"]
+def safety_peak_column(episodes: pd.DataFrame) -> tuple[str, str]:
+    """``(column, axis label)`` of the peak panel of the safety figure: the sustained peak,
+    or the raw peak, labelled as such, for a table that predates it."""
+    if SUSTAINED_PEAK_COLUMN in episodes.columns:
+        held_ms = SUSTAINED_PEAK_WINDOW_S * 1000.0
+        return SUSTAINED_PEAK_COLUMN, f"peak contact force held {held_ms:g} ms [N]"
+    return "peak_contact_force_n", "raw peak contact force (no sustained peak in table) [N]"
+
+
+__all__ = ["outcome_stats", "plot_energy", "plot_safety", "safety_peak_column",
+           "std_band"]

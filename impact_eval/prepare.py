@@ -152,7 +152,9 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
             if spec.env_key not in envs:
                 envs[spec.env_key] = make_env(
                     req.env_id, spec.controller, req.controller_overrides, spec.preset,
-                    observation=spec.observation)
+                    observation=spec.observation, robot=spec.robot)
+            if spec.carry:
+                check_carries(spec, envs[spec.env_key], req.env_id)
         first = next(iter(envs.values()))
         info = describe_env(first, req.param)
         check_param(info, req.param)
@@ -163,6 +165,17 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
     finally:
         for env in envs.values():
             env.close()
+
+
+def check_carries(spec: MethodSpec, env: object, env_id: str) -> None:
+    """A carried method (``MethodSpec.carry``) needs an env that can carry its controller's
+    state into the next episode (``ImpactEnv.carry_controller``)."""
+    base = getattr(env, "unwrapped", env)
+    if not all(callable(getattr(base, name, None))
+               for name in ("carry_controller", "controller_carry")):
+        raise InvalidArgumentError(
+            f"method {spec.name!r} carries the controller state across a cell's episodes, but "
+            f"{env_id} cannot (no carry_controller / controller_carry); valid: an IMPACT env")
 
 
 def _build_policies(req: SweepRequest, specs: list[MethodSpec], env_id: str) -> None:
@@ -210,8 +223,7 @@ def prepare(req: SweepRequest) -> Plan:
         env=req.env_id, seed=req.seed, param_name=info.param_name,
         controller_overrides=tuple(req.controller_overrides),
         methods=tuple(s.name for s in specs), values=tuple(values), episodes=req.episodes,
-        method_controllers={s.name: {"controller": s.controller, "preset": s.preset,
-                                     "warm": s.warm} for s in specs})
+        method_controllers={s.name: s.settings for s in specs})
     if continuing:
         csv_path = req.out / EPISODES_CSV
         has_rows = csv_path.exists() and bool(csvio.read_rows(csv_path))

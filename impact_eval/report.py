@@ -7,7 +7,13 @@ from pathlib import Path
 import pandas as pd
 
 from impact_envs.errors import InvalidArgumentError
-from impact_eval.metrics import EPISODE_COLUMNS, SUSTAINED_COLUMNS, wilson_interval
+from impact_eval.metrics import (
+    ADDED_COLUMNS,
+    EPISODE_COLUMNS,
+    SUSTAINED_COLUMNS,
+    SUSTAINED_PEAK_COLUMN,
+    wilson_interval,
+)
 
 EPISODES_CSV = "episodes.csv"
 SUMMARY_CSV = "summary.csv"
@@ -27,6 +33,7 @@ SUMMARY_COLUMNS: tuple[str, ...] = (
     "energy_mean_j",
     "energy_std_j",
     "peak_torque_mean_nm",
+    "peak_contact_sustained_mean_n",
     "peak_contact_force_mean_n",
     "contact_p95_mean_n",
     "contact_over_20n_mean_s",
@@ -35,18 +42,27 @@ SUMMARY_COLUMNS: tuple[str, ...] = (
     "n_unstable",
     "n_exception",
 )
-"""Columns of ``summary.csv``: one row per (method, parameter value)."""
+"""Columns of ``summary.csv``: one row per (method, parameter value). The safety measure is
+``peak_contact_sustained_mean_n`` (``safety.sustained_peak``); the raw peak follows it."""
+
+OPTIONAL_COLUMNS: tuple[str, ...] = ADDED_COLUMNS["2026-11-27"]
+"""``episodes.csv`` columns a table written before 2026-11-27 lacks and the report still
+reads without: the summary's ``peak_contact_sustained_mean_n`` is then NaN and the safety
+figure draws the raw peak instead (``plots_outcome.plot_safety``)."""
 
 
 INTEGER_COLUMNS = ("seed", "episode", "success", "success_once", "length")
 FLOAT_COLUMNS = ("param_value", "time_to_success_s", "energy_j", "peak_torque_nm",
-                 "peak_contact_force_n", "contact_p95_n", "contact_over_10n_s",
-                 "contact_over_20n_s", "mean_pose_error_m")
+                 "peak_contact_force_n", SUSTAINED_PEAK_COLUMN, "contact_p95_n",
+                 "contact_over_10n_s", "contact_over_20n_s", "mean_pose_error_m",
+                 "drawn_mass_kg")
 
 
 def load_episodes(out_dir: Path) -> pd.DataFrame:
     """Read and check ``out_dir/episodes.csv``; ``InvalidArgumentError`` (one line naming the
-    file, the row and the column) if it is missing, empty, torn or holds a malformed value."""
+    file, the row and the column) if it is missing, empty, torn or holds a malformed value.
+    A table without the ``OPTIONAL_COLUMNS`` (an older impact-eval's) is read as it is: those
+    columns stay absent."""
     path = Path(out_dir) / EPISODES_CSV
     if not path.is_file():
         raise InvalidArgumentError(f"{path} not found; run impact-eval with --out {out_dir} first")
@@ -59,7 +75,7 @@ def load_episodes(out_dir: Path) -> pd.DataFrame:
         df = pd.read_csv(path, keep_default_na=False, na_values=["nan", "NaN"])
     except (ValueError, pd.errors.ParserError, UnicodeDecodeError) as exc:
         raise InvalidArgumentError(f"cannot read {path}: {' '.join(str(exc).split())}") from None
-    missing = [c for c in EPISODE_COLUMNS if c not in df.columns]
+    missing = [c for c in EPISODE_COLUMNS if c not in df.columns and c not in OPTIONAL_COLUMNS]
     if missing:
         older = " (written by an impact-eval before 2026-11-26: rerun the sweep)" if set(
             missing) <= set(SUSTAINED_COLUMNS) else ""
@@ -67,8 +83,11 @@ def load_episodes(out_dir: Path) -> pd.DataFrame:
     if df.empty:
         raise InvalidArgumentError(f"{path} has no episodes")
     for column in (*INTEGER_COLUMNS, *FLOAT_COLUMNS):
-        _check_numeric(path, df, column)
-    df["failure_reason"] = df["failure_reason"].fillna("").astype(str)
+        if column in df.columns:
+            _check_numeric(path, df, column)
+    for column in ("failure_reason", "robot_profile"):
+        if column in df.columns:
+            df[column] = df[column].fillna("").astype(str)
     return df
 
 
@@ -105,6 +124,7 @@ def _summarize_group(g: pd.DataFrame) -> dict[str, object]:
         "energy_mean_j": g["energy_j"].mean(),
         "energy_std_j": g["energy_j"].std(),
         "peak_torque_mean_nm": g["peak_torque_nm"].mean(),
+        "peak_contact_sustained_mean_n": _mean(g, SUSTAINED_PEAK_COLUMN),
         "peak_contact_force_mean_n": g["peak_contact_force_n"].mean(),
         "contact_p95_mean_n": g["contact_p95_n"].mean(),
         "contact_over_20n_mean_s": g["contact_over_20n_s"].mean(),
@@ -113,6 +133,11 @@ def _summarize_group(g: pd.DataFrame) -> dict[str, object]:
         "n_unstable": int(reasons.str.startswith("unstable").sum()),
         "n_exception": int(reasons.str.startswith("exception").sum()),
     }
+
+
+def _mean(g: pd.DataFrame, column: str) -> float:
+    """Mean of ``column`` over the cell; NaN when the table has no such column (older)."""
+    return float(g[column].mean()) if column in g.columns else float("nan")
 
 
 def summarize(episodes: pd.DataFrame) -> pd.DataFrame:

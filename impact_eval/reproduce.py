@@ -32,7 +32,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from impact_envs.errors import InvalidArgumentError
-from impact_eval.csvio import encode_rows, read_rows, row_key
+from impact_eval.csvio import encode_rows, file_columns, older_columns_missing, read_rows, row_key
 from impact_eval.grid import format_value
 from impact_eval.reproduce_compare import (
     Cell,
@@ -89,8 +89,13 @@ def seed_scratch(table: Table, scratch: Path, cells: set[Cell]) -> None:
     for name in (RUN_JSON, IDENTITY_JSON):
         if (table.dir / name).exists():
             shutil.copy(table.dir / name, scratch / name)
-    kept = [row for row in read_rows(table.dir / EPISODES_CSV) if row_key(row)[:2] not in cells]
-    (scratch / EPISODES_CSV).write_text(encode_rows(kept))
+    kept = [row for row in read_rows(table.dir / EPISODES_CSV, older=True)
+            if row_key(row)[:2] not in cells]
+    missing = older_columns_missing(file_columns(table.dir / EPISODES_CSV)) or ()
+    # a table recorded before columns were added: its rows get them empty, so the sweep can
+    # resume into the scratch folder; the comparison reads only the table's own columns
+    (scratch / EPISODES_CSV).write_text(encode_rows({**row, **dict.fromkeys(missing, "")}
+                                                    for row in kept))
 
 
 def _positive_int(text: str) -> int:
@@ -169,12 +174,17 @@ def judge(table: Table, cells: set[Cell] | None, out: Path, kept: bool) -> int:
     for line in row_lines(rows):
         print(f"{PROG}: differs: {table.name}: {line}")
     digest, recorded = sha256(fresh), table.entry["episodes_sha256"]
-    same = digest == recorded and not rows
+    missing = older_columns_missing(file_columns(committed))
+    same = (digest == recorded or missing is not None) and not rows
+    if missing is not None:
+        print(f"{PROG}: {table.name}: the committed table predates the columns "
+              f"{', '.join(missing)}: compared value for value on its own columns, not as bytes")
     scope = ("cells " + ",".join(f"{m}@{float(v):g}" for m, v in sorted(cells))) if cells \
         else "the whole table"
+    what = "values" if missing is not None else "bytes"
     print(f"{PROG}: {table.name} ({scope}): episodes.csv "
-          f"{'identical' if same else 'DIFFERENT'} to the committed bytes (sha256 {recorded[:12]}, "
-          f"rerun {digest[:12]}; {len(rows)} rows differ)"
+          f"{'identical' if same else 'DIFFERENT'} to the committed {what} "
+          f"(sha256 {recorded[:12]}, rerun {digest[:12]}; {len(rows)} rows differ)"
           + (f"; rerun kept in {out}" if kept else ""))
     if same:
         return 0
@@ -190,7 +200,7 @@ def other_cpu_verdict(table: Table, cells: set[Cell] | None, rows: list[RowDiff]
                       here: dict[str, str]) -> int:
     """On another CPU: rows outside the rerun cells equal, none missing or extra, at most K of
     the n rerun episodes with a flipped outcome."""
-    committed = [row_key(r) for r in read_rows(table.dir / EPISODES_CSV)]
+    committed = [row_key(r) for r in read_rows(table.dir / EPISODES_CSV, older=True)]
     n = sum(cells is None or key[:2] in cells for key in committed)
     outside = sum(cells is not None and r.key[:2] not in cells for r in rows)
     presence = sum(bool(r.presence) for r in rows)

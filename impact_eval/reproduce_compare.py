@@ -112,7 +112,8 @@ class CellDiff(NamedTuple):
 
 
 def _by_key(path: Path) -> Rows:
-    return {row_key(row): row for row in read_rows(path)}
+    """Rows by key; a committed table older than today's columns is read on its own."""
+    return {row_key(row): row for row in read_rows(path, older=True)}
 
 
 def _row_diff(key: tuple[str, str, int], a: dict[str, str] | None,

@@ -153,7 +153,8 @@ def committed_problem(table: Table) -> str | None:
     path = table.dir / EPISODES_CSV
     try:
         digest = sha256(path)
-        rows = len(read_rows(path)) if digest == table.entry["episodes_sha256"] else None
+        recorded = digest == table.entry["episodes_sha256"]
+        rows = len(read_rows(path, older=True)) if recorded else None
     except (OSError, InvalidArgumentError) as exc:
         raise InvalidArgumentError(f"cannot read {path}: {' '.join(str(exc).split())}") from None
     if digest != table.entry["episodes_sha256"]:

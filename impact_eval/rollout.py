@@ -117,7 +117,8 @@ class LockstepBatch:
     ) -> dict[str, np.ndarray]:
         """Reset env ``i`` for ``job``; a failing reset ends the episode at length 0."""
         try:
-            obs, _ = self.envs[i].reset(seed=job.seed, options={self.param_name: job.value})
+            obs, info = self.envs[i].reset(seed=job.seed, options={self.param_name: job.value})
+            tracker.start(info)  # the mass and robot profile the env set up
             if not obs_is_finite(obs):
                 raise SimulationError("non-finite observation after reset")
             self._record(i)

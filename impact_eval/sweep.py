@@ -3,7 +3,8 @@
 
 Each worker owns a few envs per controller and one policy per method, and runs tasks of up to
 ``envs_per_worker`` episodes of one (method, value) in lockstep (one batched ``policy.act`` per
-step). Workers stream each finished episode's row to the parent, the only writer of the CSV.
+step); a carried method's task is its whole cell, one episode after another (``chain.py``).
+Workers stream each finished episode's row to the parent, the only writer of the CSV.
 """
 
 from __future__ import annotations
@@ -20,8 +21,9 @@ from tqdm import tqdm
 from impact_envs.errors import ImpactError
 from impact_envs.parallel import single_threaded_children, single_threaded_torch
 from impact_envs.policies.interface import Policy
+from impact_eval.chain import chain_jobs, run_chain
 from impact_eval.grid import episode_seed, format_value
-from impact_eval.methods import MethodSpec
+from impact_eval.methods import MethodSpec, resolve_method
 from impact_eval.rollout import EpisodeJob, LockstepBatch
 
 RowSink = Callable[[dict[str, object]], None]
@@ -61,33 +63,39 @@ class SweepConfig:
 
 @dataclass(frozen=True)
 class EpisodeBatch:
-    """Up to ``envs_per_worker`` episodes of one (method, value), run in lockstep."""
+    """Up to ``envs_per_worker`` episodes of one (method, value) in lockstep, or a chain."""
 
     method: str
     value: float
     jobs: tuple[EpisodeJob, ...]
+    """The episodes whose rows the task writes."""
+    chain: tuple[EpisodeJob, ...] = ()
+    """Carried methods: the cell's episodes 0 to the last of ``jobs``, in order on one env, the
+    controller state carried from each into the next (``chain.py``); the rest are reruns."""
 
 
 def plan_tasks(cfg: SweepConfig, done: set[tuple[str, str, int]]) -> list[EpisodeBatch]:
     """Tasks for every cell not in ``done`` (keys as ``csvio.row_key``).
 
     Ordered value-major, then episode block, then method, so that an interrupted sweep leaves
-    paired results (all methods at the same values and seeds).
+    paired results (all methods at the same values and seeds). A carried method's cell is one
+    task, in the first block (``chain.chain_jobs``).
     """
     tasks = []
     size = cfg.envs_per_worker
+    carried = {m for m in cfg.methods if resolve_method(m).carry}
     for vi, value in enumerate(cfg.values):
         for start in range(0, cfg.episodes, size):
-            block = range(start, min(start + size, cfg.episodes))
             for method in cfg.methods:
-                jobs = tuple(
-                    EpisodeJob(value, episode_seed(cfg.seed, vi, e), e)
-                    for e in block
-                    if (method, format_value(value), e) not in done
-                )
-                if jobs:
-                    tasks.append(EpisodeBatch(method, value, jobs))
-    return tasks
+                if method not in carried:
+                    tasks.append(EpisodeBatch(method, value, tuple(
+                        EpisodeJob(value, episode_seed(cfg.seed, vi, e), e)
+                        for e in range(start, min(start + size, cfg.episodes))
+                        if (method, format_value(value), e) not in done)))
+                elif start == 0:
+                    chain, todo = chain_jobs(cfg.seed, vi, value, cfg.episodes, method, done)
+                    tasks.append(EpisodeBatch(method, value, todo, chain))
+    return [task for task in tasks if task.jobs]
 
 
 class Worker:
@@ -113,8 +121,6 @@ class Worker:
         return envs
 
     def _policy(self, method: str) -> Policy:
-        from impact_eval.methods import resolve_method
-
         if method not in self.policies:
             spec = resolve_method(method)
             env = self._envs(spec, 1)[0]
@@ -124,9 +130,10 @@ class Worker:
     def run(self, task: EpisodeBatch, sink: RowSink,
             heartbeat: Callable[[], None] | None = None) -> None:
         """Run one task; ``sink`` receives each full CSV row as its episode ends."""
-        from impact_eval.methods import resolve_method
-
         spec = resolve_method(task.method)
+        if spec.carry:
+            run_chain(self, spec, task, sink, heartbeat)
+            return
         envs = self._envs(spec, len(task.jobs))
         snapshot = self._warm_snapshot(spec, task.value) if spec.warm else None
         for env in envs:
@@ -137,20 +144,15 @@ class Worker:
                               self.cfg.policy_dt, self._videos(task))
 
         def on_finish(i: int, metrics: dict[str, object]) -> None:
-            job = task.jobs[i]
-            sink(
-                {
-                    "method": task.method,
-                    "env_id": self.cfg.canonical_env_id,
-                    "param_name": self.cfg.param_name,
-                    "param_value": job.value,
-                    "seed": job.seed,
-                    "episode": job.episode,
-                    **metrics,
-                }
-            )
+            sink(self.row(task.method, task.jobs[i], metrics))
 
         batch.run(task.jobs, on_finish, heartbeat)
+
+    def row(self, method: str, job: EpisodeJob, metrics: dict[str, object]) -> dict[str, object]:
+        """The CSV row of ``job``'s finished episode."""
+        return {"method": method, "env_id": self.cfg.canonical_env_id,
+                "param_name": self.cfg.param_name, "param_value": job.value, "seed": job.seed,
+                "episode": job.episode, **metrics}
 
     def _videos(self, task: EpisodeBatch) -> dict[int, object]:
         """The task's episodes to record (episode index < ``video_episodes``), by batch index."""

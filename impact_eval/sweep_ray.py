@@ -1,4 +1,5 @@
-"""``impact-eval --executor ray``: every sweep task (a lockstep batch of one cell) is a Ray task.
+"""``impact-eval --executor ray``: every sweep task (a lockstep batch of one cell, or a carried
+method's whole cell, ``chain.py``) is a Ray task.
 
 The driver submits all tasks at once, each asking for one CPU, and takes their results as they
 finish (``ray.wait``); it alone writes ``episodes.csv`` (through the same sink as the local

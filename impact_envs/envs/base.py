@@ -29,6 +29,7 @@ from impact_envs.envs.arguments import (
     initial_params,
     load_task,
 )
+from impact_envs.envs.carry import ControllerCarry, apply_carry, check_carry, controller_carry
 from impact_envs.envs.observation_space import state_space
 from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.envs.pixels import PixelObservations, check_view
@@ -86,7 +87,8 @@ class ImpactEnv(gym.Env):
         self.task = task = self.make_task() if task is None else load_task(task)
         noise = SensorNoise() if robot.sensor_noise else SensorNoise.off()
         self.sim = FrankaSim(task.scene_xml, task.object_bodies,
-                             grasp_force_n=robot.grasp_force_n, noise=noise)
+                             grasp_force_n=robot.grasp_force_n, noise=noise,
+                             torque_reading=robot.torque_reading)
         task.bind(self.sim)
         self._params = initial_params(task, object_mass, task_params)
         perturbation = ModelPerturbation(link_mass_scale=1.0 + float(robot.model_mass_error))
@@ -97,6 +99,7 @@ class ImpactEnv(gym.Env):
         self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
                                task.before_tick if task.has_tick_hook else None)
         self._warm: ModelSnapshot | None = None
+        self._carry: ControllerCarry | None = None
         self._camera, self._size = render.camera, (int(render.height), int(render.width))
         self._check_render(render)
         self._renderer: mujoco.Renderer | None = None
@@ -139,6 +142,32 @@ class ImpactEnv(gym.Env):
         scored episodes stay independent of one another ("warm robot", docs/eval.md).
         """
         self._warm = snapshot
+
+    def controller_carry(self) -> ControllerCarry:
+        """A copy of the controller's whole state now (kernel buffers, internal model, replay
+        sampler), for ``carry_controller``: take it at the end of an episode."""
+        return controller_carry(self)
+
+    def carry_controller(self, carry: ControllerCarry | None) -> None:
+        """Start the next episode with the controller state ``carry`` (``None``: fresh).
+
+        The next ``reset`` resets the scene and the arm as usual (new pose, parameters,
+        target), resets the controller at the new pose, then overwrites its state with
+        ``carry``'s: estimator and observer filters, slow filter, payload model, rate
+        limiter's last command, null-space posture, contact guard, internal model with its
+        replay and history. Only the target filter starts afresh (the env sets the target per
+        episode; ``envs/carry.py`` says why). The carry is used by that one reset, and it
+        replaces a ``warm_start`` snapshot for it. As the authors run their benchmark, the
+        controller activated once for a bin of episodes ("Carried controller state",
+        docs/eval.md).
+
+        Raises:
+            InvalidArgumentError: ``carry`` is not a ``ControllerCarry`` of an env made with
+                the same arguments (the env is left as it was).
+        """
+        if carry is not None:
+            check_carry(self, carry)
+        self._carry = carry
 
     @property
     def target_pos_world(self) -> np.ndarray:
@@ -202,7 +231,10 @@ class ImpactEnv(gym.Env):
         sim.reset_robot(q0, 0.04, rng)
         mujoco.mj_forward(sim.model, sim.data)
         self.controller.reset(q0, keep_internal_model=self.persist_internal_model)
-        if self._warm is not None:
+        carry, self._carry = self._carry, None
+        if carry is not None:
+            apply_carry(self, carry)
+        elif self._warm is not None:
             self.controller.internal_model.restore(self._warm)
         self.dynamics.update(q0, np.zeros(7))
         self._target_pos = self.dynamics.pos_ee_world.copy()
@@ -309,6 +341,7 @@ class ImpactEnv(gym.Env):
         info.update(m)  # contact with the scene, raw: the evaluation judges it (safety.py)
         info["contact_trace_dt_s"] = self.sim.dt
         info["supported_weight_n"] = self.task.supported_weight_n(self._episode_params)
+        info["robot_profile"] = robot_profile(self)  # episodes.csv's robot_profile
         info.update({k: float(v) for k, v in self._episode_params.items()})
         info.update(self.task.info(self.sim))
         return info
@@ -329,3 +362,13 @@ class ImpactEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+
+DEFAULT_ROBOT_PROFILE = "ideal"
+"""The simulated robot's profile when the env sets none: the idealised arm of today's envs."""
+
+
+def robot_profile(env: object) -> str:
+    """Name of the simulated robot's profile, reported as ``info["robot_profile"]``: the env's
+    ``robot_profile`` attribute, ``DEFAULT_ROBOT_PROFILE`` ("ideal") when it has none."""
+    return str(getattr(env, "robot_profile", DEFAULT_ROBOT_PROFILE))

@@ -9,6 +9,8 @@ from numbers import Integral, Real
 
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.robot.hand import DEFAULT_GRASP_FORCE_N, check_grasp_force
+from impact_envs.robot.sim import TORQUE_READINGS as TORQUE_READINGS  # re-exported
+from impact_envs.robot.sim import check_torque_reading
 
 MAX_RENDER_PX = 4096
 """Largest render width or height [px] (the scenes' offscreen buffer is sized to match)."""
@@ -39,11 +41,24 @@ class RobotOptions:
         grasp_force_n: Gripper squeeze force when closing on an object [N], above 0 and at
             most ``MAX_GRASP_FORCE_N`` (140 N, the Franka Hand's quoted peak force).
         model_mass_error: Relative error of the controller's link masses (0: exact model).
+        torque_reading: What the controller reads as the measured joint torque, one of
+            ``TORQUE_READINGS`` (docs/sensing.md, "Torque reading"):
+
+            - ``"link_side"`` (default): the link-side joint-torque sensors, i.e. motor torque
+              + joint damping + dof Coulomb friction, plus a per-episode bias and white noise
+              (``sensor_noise``). Joint friction is inside the reading, so the wrench estimator
+              sees only external forces.
+            - ``"commanded"``: the torque the drives applied (MuJoCo ``qfrc_actuator`` of the
+              arm: the command after the drives' torque-limit clip), with no torque-sensor
+              noise and no bias: an echo of the command, not a sensor (the paper authors'
+              simulation). Encoder noise on q / dq is unchanged (``sensor_noise``). Joint
+              damping and Coulomb friction then read as external forces to the estimator.
     """
 
     sensor_noise: bool = True
     grasp_force_n: float = DEFAULT_GRASP_FORCE_N
     model_mass_error: float = 0.0
+    torque_reading: str = "link_side"
 
     def __post_init__(self) -> None:
         if not isinstance(self.sensor_noise, bool):
@@ -51,6 +66,7 @@ class RobotOptions:
                 f"invalid sensor_noise {self.sensor_noise!r}; valid: True or False")
         check_grasp_force(self.grasp_force_n)
         _real("model_mass_error", self.model_mass_error, -0.9, 10.0, "")
+        check_torque_reading(self.torque_reading)
 
 
 @dataclass(frozen=True)

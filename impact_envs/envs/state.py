@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from impact_envs.envs.base import ImpactEnv
 
 ENV_FIELDS = ("_params", "_episode_params", "_target_pos", "_target_quat", "_gripper_cmd",
-              "_step_count", "_success_once", "_q_meas", "_dq_meas", "_warm")
+              "_step_count", "_success_once", "_q_meas", "_dq_meas", "_warm", "_carry")
 """ImpactEnv attributes that change during an episode."""
 
 
@@ -44,10 +44,13 @@ class EnvState:
 
 
 def state_identity(env: ImpactEnv) -> dict[str, str]:
-    """Env class, task, controller mode, preset and the full controller configuration."""
+    """Env class, task, controller mode, preset, the full controller configuration and the
+    torque reading (``RobotOptions.torque_reading``: a link-side state carries a sensor bias
+    and estimator filters that a commanded reading would continue wrongly, and vice versa)."""
     return {"env": f"{type(env).__module__}.{type(env).__qualname__}",
             "task": str(env.task.name), "controller": str(env.controller_mode),
-            "preset": str(env.controller_preset), "config": repr(env.controller.config)}
+            "preset": str(env.controller_preset), "config": repr(env.controller.config),
+            "torque_reading": str(env.sim.torque_reading)}
 
 
 def _shape_errors(expected: dict[str, Any], given: object, what: str) -> list[str]:

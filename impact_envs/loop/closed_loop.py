@@ -77,18 +77,18 @@ class ClosedLoop:
         self._bundle: Callable[..., object] | None = None
         self._tick: Callable[..., int] | None = None
 
-    def _entries(self, args: tuple) -> tuple[Callable[..., object], Callable[..., int]]:
+    def _entries(self, args: tuple, friction: Callable[[], np.ndarray]
+                 ) -> tuple[Callable[..., object], Callable[..., int]]:
         """``bundle_tick_args`` and ``bundled_tick`` compiled for these argument types,
         resolved on the first step: calling them skips numba's per-call type dispatch (about
         0.1 us per array, some 60 arrays here). Every array the loop passes is built here or
         by the simulator and controller with fixed dtypes and dimensions, so the types never
-        change."""
+        change (``friction``: gives the per-tick friction argument)."""
         if self._tick is None:
             self._bundle = bundle_tick_args.compile(tuple(numba.typeof(a) for a in args))
             bundled = self._bundle(*args)
             self._tick = bundled_tick.compile(
-                (numba.typeof(0), numba.typeof(self.sim.frictionloss_torque()),
-                 numba.typeof(bundled)))
+                (numba.typeof(0), numba.typeof(friction()), numba.typeof(bundled)))
         return self._bundle, self._tick
 
     def run(self, targets: TickTargets) -> StepTrace:
@@ -101,7 +101,8 @@ class ClosedLoop:
                         np.empty((n, 7)), np.empty(21), float(targets.gripper_cmd), cmd, mask,
                         self._fric_model)
         parts = (plan, sim.loop_arrays(), self.arm, self._dyn, ctrl.kernel_state())
-        bundle, tick = self._entries(parts)
+        friction = sim.frictionloss_reader()  # the friction inside the torque reading
+        bundle, tick = self._entries(parts, friction)
         args = bundle(*parts)
         contact = np.empty((n, 2))
         last = 0
@@ -109,7 +110,7 @@ class ClosedLoop:
         for i in range(n):
             if hook is not None:
                 hook(sim, float(data.time))
-            flags = tick(i, sim.frictionloss_torque(), args)
+            flags = tick(i, friction(), args)
             if flags:
                 self._raise_or_learn(i, flags, plan, targets.learn_mask)
             sim.step()

@@ -8,6 +8,7 @@ names that say so; the controller never sees it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
@@ -31,16 +32,31 @@ from impact_envs.robot.sim_kernels import (
     state_status,
 )
 
+TORQUE_READINGS = ("link_side", "commanded")
+"""What the controller reads as the measured joint torque (``FrankaSim(torque_reading=...)``,
+``RobotOptions.torque_reading``; docs/sensing.md): ``"link_side"`` the FR3's link-side
+joint-torque sensors (motor torque + joint damping + dof Coulomb friction, with bias and
+noise; the default); ``"commanded"`` the torque the drives applied (MuJoCo ``qfrc_actuator``
+of the arm), without torque noise or bias, as in the paper authors' simulation."""
+
+
+def check_torque_reading(value: object) -> None:
+    """One-line ``InvalidArgumentError`` unless ``value`` is one of ``TORQUE_READINGS``."""
+    if not isinstance(value, str) or value not in TORQUE_READINGS:
+        raise InvalidArgumentError(
+            f"invalid torque_reading {value!r}; valid choices: {', '.join(TORQUE_READINGS)}")
+
 
 class SimArrays(NamedTuple):
     """What the closed loop's per-tick kernel reads and writes in the simulator.
 
     ``noise_stds`` = [q, dq, tau] sensor noise [rad, rad/s, Nm]; the arm's ``qpos``,
-    ``qvel``, ``qfrc_actuator`` and ``qfrc_damper`` as views of ``MjData``; ``tau_bias`` the
-    episode's torque-sensor bias [Nm]; ``qpos`` all of it (fingers at ``finger_i``/``_j``);
-    ``torque_limits`` the hardware limits [Nm]; ``tau_applied`` the last torque sent [Nm];
-    ``ctrl`` MuJoCo's controls, with the arm's actuators at ``arm_act`` and the gripper's at
-    ``gripper_act``.
+    ``qvel``, ``qfrc_actuator`` and ``qfrc_damper`` as views of ``MjData`` (with
+    ``torque_reading="commanded"`` the damper is a zero array, and the tau noise and the
+    bias are zero); ``tau_bias`` the episode's torque-sensor bias [Nm]; ``qpos`` all of it
+    (fingers at ``finger_i``/``_j``); ``torque_limits`` the hardware limits [Nm];
+    ``tau_applied`` the last torque sent [Nm]; ``ctrl`` MuJoCo's controls, with the arm's
+    actuators at ``arm_act`` and the gripper's at ``gripper_act``.
     """
 
     noise_stds: np.ndarray
@@ -76,6 +92,9 @@ class FrankaSim:
         object_bodies: names of the task's movable bodies (grouped as "object" for contacts).
         grasp_force_n: gripper squeeze force when closing on an object [N].
         noise: sensor noise model.
+        torque_reading: one of ``TORQUE_READINGS``: the link-side torque sensors
+            (``"link_side"``) or the applied torque, noise- and bias-free (``"commanded"``);
+            encoder noise is the same in both.
     """
 
     def __init__(
@@ -85,7 +104,12 @@ class FrankaSim:
         *,
         grasp_force_n: float = 70.0,
         noise: SensorNoise | None = None,
+        torque_reading: str = "link_side",
     ) -> None:
+        check_torque_reading(torque_reading)
+        self._commanded = torque_reading == "commanded"
+        self._zero_torque = np.zeros(7)
+        """Stands in for damping, friction (and bias) in a ``"commanded"`` reading."""
         self.model = load_scene(scene_xml)
         self.data = mujoco.MjData(self.model)
         self.noise = noise or SensorNoise()
@@ -132,7 +156,13 @@ class FrankaSim:
     @noise.setter
     def noise(self, value: SensorNoise) -> None:
         self._noise = value
-        self._noise_stds = np.array([value.q_std_rad, value.dq_std_rad_s, value.tau_std_nm])
+        tau_std = 0.0 if self._commanded else value.tau_std_nm
+        self._noise_stds = np.array([value.q_std_rad, value.dq_std_rad_s, tau_std])
+
+    @property
+    def torque_reading(self) -> str:
+        """What ``read_sensors`` and the loop read as joint torque (``TORQUE_READINGS``)."""
+        return "commanded" if self._commanded else "link_side"
 
     def _arm_views(self) -> tuple[np.ndarray, ...]:
         """(qpos, qvel, qfrc_actuator, qfrc_damper) of the arm, as views when contiguous.
@@ -180,7 +210,8 @@ class FrankaSim:
         d.ctrl[:] = 0.0
         d.ctrl[self.gripper_act] = finger_opening_m
         self.tau_applied[:] = 0.0
-        self._tau_bias = self.noise.tau_bias_std_nm * rng.standard_normal(7)
+        bias_std = 0.0 if self._commanded else self.noise.tau_bias_std_nm
+        self._tau_bias = bias_std * rng.standard_normal(7)  # drawn in both readings
 
     def arm_state(self) -> tuple[np.ndarray, np.ndarray]:
         """True joint positions [rad] and velocities [rad/s] (privileged)."""
@@ -193,8 +224,10 @@ class FrankaSim:
 
         The torque sensor sits on the link side of each joint's transmission: it reads the motor
         torque minus joint damping and Coulomb friction, so the rigid-body equation
-        ``M(q) q'' + C q' + g = tau_measured + tau_ext`` holds with the armature in M. The three
-        arrays are views of one new (21,) array.
+        ``M(q) q'' + C q' + g = tau_measured + tau_ext`` holds with the armature in M. With
+        ``torque_reading="commanded"`` tau is the applied torque (``qfrc_actuator``) exactly,
+        and damping and friction join ``tau_ext``. The three arrays are views of one new (21,)
+        array.
 
         Args:
             rng: Source of the 21 standard-normal draws of this reading.
@@ -203,9 +236,28 @@ class FrankaSim:
         """
         z = rng.standard_normal(21) if noise is None else noise
         out = np.empty(21)
-        sense(z, self._noise_stds, *self._arm_views(), self.frictionloss_torque(), self._tau_bias,
-               out)
+        qpos, qvel, qfrc_actuator, damper = self._sensed_views()
+        sense(z, self._noise_stds, qpos, qvel, qfrc_actuator, damper, self.frictionloss_reader()(),
+              self._tau_bias, out)
         return out[:7], out[7:14], out[14:]
+
+    def _sensed_views(self) -> tuple[np.ndarray, ...]:
+        """``_arm_views`` as the torque reading sees them: the damper's view replaced by zeros
+        in a ``"commanded"`` reading."""
+        views = self._arm_views()
+        if self._commanded:
+            return (*views[:3], self._zero_torque)
+        return views
+
+    def frictionloss_reader(self) -> Callable[[], np.ndarray]:
+        """The function that gives the Coulomb friction inside the torque reading [Nm], called
+        before each tick (the closed loop passes its result to ``loop_tick``):
+        ``frictionloss_torque`` for ``"link_side"``, zeros for ``"commanded"``."""
+        return self._no_friction if self._commanded else self.frictionloss_torque
+
+    def _no_friction(self) -> np.ndarray:
+        """Zeros [Nm]: a ``"commanded"`` reading has no friction term."""
+        return self._zero_torque
 
     def loop_arrays(self) -> SimArrays:
         """Sensing and actuation arrays of the closed loop's tick (views of ``MjData``, valid
@@ -219,7 +271,7 @@ class FrankaSim:
             raise InvalidArgumentError(
                 "the arm's qpos/qvel are not contiguous in this scene; valid: the seven arm "
                 "joints declared one after another (as in assets/fr3_hand.xml)")
-        qpos_arm, qvel_arm, qfrc_actuator, qfrc_damper = self._arm_views()
+        qpos_arm, qvel_arm, qfrc_actuator, qfrc_damper = self._sensed_views()
         finger_i, finger_j = self._finger_ids
         return SimArrays(self._noise_stds, qpos_arm, qvel_arm, qfrc_actuator, qfrc_damper,
                          self._tau_bias, self._qpos, finger_i, finger_j, self.torque_limits,

@@ -34,7 +34,8 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
           overrides: Sequence[str] = (), joint_friction: bool = True) -> list[str]:
     """Run one episode (until success or the step limit); return the printed lines."""
     spec = resolve_method(method)
-    env = make_env(check_env_id(env_id), spec.controller, overrides, spec.preset)
+    env = make_env(check_env_id(env_id), spec.controller, overrides, spec.preset,
+                   robot=spec.robot)  # impact_authors: the commanded torque reading
     limit = np.asarray(env.unwrapped.controller.config.limits.torque_max_nm)
     saturated = np.zeros(len(limit), dtype=int)
     if not joint_friction:

@@ -16,8 +16,8 @@ import pytest  # noqa: E402
 from impact_eval import plots_outcome  # noqa: E402
 from impact_eval.plots_outcome import outcome_stats, std_band  # noqa: E402
 
-COLUMNS = ["peak_contact_force_n", "contact_p95_n", "contact_over_20n_s", "peak_torque_nm",
-           "energy_j"]
+COLUMNS = ["peak_contact_sustained_n", "peak_contact_force_n", "contact_p95_n",
+           "contact_over_20n_s", "peak_torque_nm", "energy_j"]
 
 
 def _episodes() -> pd.DataFrame:
