@@ -18,7 +18,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from impact_envs.errors import ImpactError
+from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.parallel import single_threaded_children, single_threaded_torch
 from impact_envs.policies.interface import Policy
 from impact_eval.chain import chain_jobs, run_chain
@@ -83,7 +83,7 @@ def plan_tasks(cfg: SweepConfig, done: set[tuple[str, str, int]]) -> list[Episod
     """
     tasks = []
     size = cfg.envs_per_worker
-    carried = {m for m in cfg.methods if resolve_method(m).carry}
+    carried = {m for m in cfg.methods if _carried(m)}
     for vi, value in enumerate(cfg.values):
         for start in range(0, cfg.episodes, size):
             for method in cfg.methods:
@@ -96,6 +96,15 @@ def plan_tasks(cfg: SweepConfig, done: set[tuple[str, str, int]]) -> list[Episod
                     chain, todo = chain_jobs(cfg.seed, vi, value, cfg.episodes, method, done)
                     tasks.append(EpisodeBatch(method, value, todo, chain))
     return [task for task in tasks if task.jobs]
+
+
+def _carried(method: str) -> bool:
+    """Whether ``method`` runs its cells as carried chains (an unregistered name: no; the CLI
+    and ``evaluate`` refuse those before planning)."""
+    try:
+        return resolve_method(method).carry
+    except InvalidArgumentError:
+        return False
 
 
 class Worker:

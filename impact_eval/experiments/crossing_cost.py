@@ -60,9 +60,9 @@ def loop_arguments(env: gym.Env) -> tuple:
     loop, captured = env.unwrapped.loop, {}
     entries = loop._entries
 
-    def spy(parts: tuple) -> object:
+    def spy(parts: tuple, friction: object) -> object:
         captured["parts"] = parts
-        return entries(parts)
+        return entries(parts, friction)
 
     loop._entries = spy
     try:
@@ -70,7 +70,7 @@ def loop_arguments(env: gym.Env) -> tuple:
         env.step(np.concatenate([obs["ee_pos"], obs["ee_rot6d"], [-1.0]]))
     finally:
         loop._entries = entries
-    return (0, env.unwrapped.sim.frictionloss_torque(), *captured["parts"])
+    return (0, env.unwrapped.sim.frictionloss_reader()(), *captured["parts"])
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -66,7 +66,7 @@ def task_costs(episodes_csv: Path, envs_per_worker: int, step_s: dict[str, float
     from impact_eval.methods import resolve_method
 
     cost: dict[tuple[float, int, str], float] = {}
-    for row in read_rows(episodes_csv):
+    for row in read_rows(episodes_csv, older=True):
         if methods and row["method"] not in methods:
             continue
         controller = resolve_method(row["method"]).controller

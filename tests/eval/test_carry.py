@@ -115,6 +115,7 @@ def test_an_interrupted_run_resumes_to_the_same_bytes(reference: Path, tmp_path:
     assert (out / "episodes.csv").read_bytes() == reference.read_bytes()
 
 
+@pytest.mark.slow  # ~35 s; Ray's bytes are checked in test_sweep_ray
 def test_the_ray_executor_writes_the_same_bytes(ray_local, reference: Path,
                                                 tmp_path: Path) -> None:
     assert main(_args(tmp_path / "ray", "--executor", "ray")) == 0

@@ -114,6 +114,7 @@ def test_sigterm_mid_rerun_leaves_no_folder(results: Path, tmp_path: Path, capsy
     monkeypatch.setattr(tempfile, "tempdir", str(scratch))
     monkeypatch.setenv("IMPACT_FAKE_STEP_DELAY", "0.01")  # ~5 s of episodes: stopped at 0.5 s
     out_dir = tmp_path / "kept" / "rerun"
+    before = signal.getsignal(signal.SIGTERM)  # SIG_DFL, or a session's Ray instance's
     timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGTERM))
     timer.start()
     try:
@@ -124,4 +125,4 @@ def test_sigterm_mid_rerun_leaves_no_folder(results: Path, tmp_path: Path, capsy
     assert stopped.value.code == 128 + signal.SIGTERM
     assert "terminated (signal 15)" in capsys.readouterr().out
     assert list(scratch.iterdir()) == [] and not (tmp_path / "kept").exists()
-    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # the handler is restored
+    assert signal.getsignal(signal.SIGTERM) is before  # the handler is restored

@@ -58,6 +58,7 @@ def test_a_worker_killed_mid_task_is_retried_and_each_episode_arrives_once(ray_l
     assert len(keys) == len(set(keys)) == sum(len(t.jobs) for t in tasks) == 16
 
 
+@pytest.mark.slow  # ~100 s; the in-process retry test above covers a killed worker
 def test_a_killed_worker_leaves_the_file_identical(ray_local, reference, tmp_path):
     (ray_local / "fired").unlink(missing_ok=True)
     (ray_local / "arm").touch()
@@ -87,6 +88,7 @@ def test_resume_works_across_executors(ray_local, reference, tmp_path, capsys, e
     assert (out / "episodes.csv").read_bytes() == reference.read_bytes()
 
 
+@pytest.mark.slow  # ~30 s; --runslow
 def test_sigkilled_ray_driver_resumes_to_the_same_file(ray_local, reference, tmp_path):
     out = tmp_path / "killed"
     env = {**cli_env(), "IMPACT_FAKE_STEP_DELAY": "0.01"}  # slow, same results

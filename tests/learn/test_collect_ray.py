@@ -50,6 +50,7 @@ def test_ray_collection_stores_what_a_local_run_stores(ray_local, local_store, t
     assert_same_store(tmp_path / "ray.zarr", local_store)
 
 
+@pytest.mark.slow  # ~100 s (Ray restarts a killed worker); --runslow
 def test_a_worker_killed_mid_batch_changes_nothing(ray_local, local_store, tmp_path):
     (ray_local / "fired").unlink(missing_ok=True)
     (ray_local / "arm").touch()
@@ -61,7 +62,9 @@ def test_a_worker_killed_mid_batch_changes_nothing(ray_local, local_store, tmp_p
     assert_same_store(tmp_path / "ray.zarr", local_store)
 
 
-@pytest.mark.parametrize("first, then", [("local", "ray"), ("ray", "local")])
+@pytest.mark.parametrize("first, then", [
+    ("local", "ray"),
+    pytest.param("ray", "local", marks=pytest.mark.slow)])  # ~130 s; --runslow
 def test_resume_across_executors(ray_local, local_store, tmp_path, first, then):
     out = tmp_path / "cut.zarr"
     assert _collect(out, first, episodes=4) == 4
