@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from impact_envs.control.config import ControllerConfig, libfranka_limits
+from impact_envs.control.limits import LimitsConfig
 from impact_envs.errors import ImpactError, check_choice
 
 TORQUE_SOURCES: tuple[str, ...] = ("tau_J", "tau_J+g")
@@ -70,10 +71,25 @@ def torque_command(tau_total: np.ndarray, tau_gravity: np.ndarray) -> np.ndarray
     return cmd
 
 
+def _stricter_than_libfranka(limits: LimitsConfig) -> bool:
+    """Whether ``limits`` (a ``LimitsConfig``) bound the command without gravity at least as
+    tightly as libfranka: rate at most its 999.999 Nm/s, torques at most the FR3's."""
+    fr3 = libfranka_limits()
+    return (not limits.rate_limit_includes_gravity
+            and limits.torque_rate_max_nm_per_s <= fr3.torque_rate_max_nm_per_s
+            and all(a <= b for a, b in zip(limits.torque_max_nm, fr3.torque_max_nm,
+                                           strict=True)))
+
+
 def fr3_config(base: ControllerConfig | None = None) -> ControllerConfig:
     """``base`` (default ``ControllerConfig()``) as it must run on an FR3: libfranka's exact
-    limits, the in-kernel learner (a bounded tick) and the contact guard."""
+    limits, the in-kernel learner (a bounded tick) and the contact guard.
+
+    A base whose own limits are stricter than libfranka's keeps them (``authors_real``: their
+    0.5 Nm per tick on the command without gravity): the runner rate-limits every command it
+    sends with libfranka's ``limitRate`` in any case, so the robot's own check always holds."""
     cfg = base or ControllerConfig()
-    return replace(cfg, limits=libfranka_limits(),
+    return replace(cfg, limits=cfg.limits if _stricter_than_libfranka(cfg.limits)
+                   else libfranka_limits(),
                    internal_model=replace(cfg.internal_model, learner="numba"),
                    guard=replace(cfg.guard, enabled=True))

@@ -97,6 +97,8 @@ class PickPlaceTarget:
         )
         self.records: list[StepRecord] = []
         self.finished = False
+        self.gripper_cmd = 1.0
+        """-1 from an opening command on, +1 from a grasp on (the loop hands it over)."""
 
     @property
     def failure(self) -> str:
@@ -148,6 +150,7 @@ class PickPlaceTarget:
     def _gripper_step(self, command: GripperCommand, now_s: float) -> None:
         if not self._sent:
             self.gripper.send(command)
+            self.gripper_cmd = 1.0 if command.kind == "grasp" else -1.0
             self._sent = True
             return
         reply = self.gripper.poll()

@@ -94,6 +94,8 @@ class PolicyTarget:
         self.low, self.high, self.max_step_m = low, high, float(max_step_m)
         self._args = (make_policy, extra_obs, gripper_host)
         self.refused = self.actions = 0
+        self.gripper_cmd = 1.0
+        """The last accepted action's gripper value (``action[9]``, clipped to [-1, 1])."""
         self.finished = False  # a policy runs until the loop's time is up
         self._proc: Any = None
 
@@ -142,6 +144,7 @@ class PolicyTarget:
         self._from, self._to = here, here + move
         self._q_from, self._q_to = q_here, matrix_to_quat(matrix_from_rot6d(action[3:9]))
         self._t0 = now_s
+        self.gripper_cmd = float(np.clip(action[9], -1.0, 1.0))
 
     def _observation(self, r: FciReading) -> dict[str, np.ndarray]:
         """What the robot measures, as the envs name it (float32; the TCP from our model at

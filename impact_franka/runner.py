@@ -164,9 +164,14 @@ class TargetSource(Protocol):
     ``(position (3,) [m], quaternion (4,) w-first)`` for the cycle at ``now_s`` seconds into
     the loop, given that cycle's reading; ``close`` ends it (every exit path calls it).
     ``finished`` turns True when the source has nothing more to do: the loop then ramps out
-    and ends as when its time is up."""
+    and ends as when its time is up. ``gripper_cmd`` is the hand's current command (-1 open
+    ... +1 closed), handed to the controller whenever it changes (the authors' payload model
+    holds off while the hand is commanded open; ``ImpactController.set_gripper_command``); a
+    source without a hand keeps +1 (never commanded open), as does one without the
+    attribute."""
 
     finished: bool
+    gripper_cmd: float
 
     def start(self, pos: np.ndarray, quat: np.ndarray, arm: object) -> None: ...
 
@@ -181,6 +186,7 @@ class HoldTarget:
     def __init__(self, step: TargetStep | None = None) -> None:
         self.step = step
         self.finished = False
+        self.gripper_cmd = 1.0  # no hand commanded
         self.pos, self.quat = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
 
     def start(self, pos: np.ndarray, quat: np.ndarray, arm: object) -> None:
@@ -233,7 +239,8 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
     _precompile(controller, first.q, first.tau_measured, pos, quat)
     rows: list[tuple] = []
     sent, reason, end, strikes, held, message = np.zeros(7), "", None, 0, 0, ""
-    success, robot_t0 = 1.0, None
+    success, robot_t0, gripper = 1.0, None, 1.0
+    controller.set_gripper_command(gripper)
     source.start(pos, quat, arm)
     _pause_gc()
     start = time.perf_counter()
@@ -249,6 +256,9 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
                 t0 = time.perf_counter_ns()
                 tau_meas = r.tau_measured + arm.gravity if add_gravity else r.tau_measured
                 target_pos, target_quat = source.target(now, r)
+                if getattr(source, "gripper_cmd", 1.0) != gripper:
+                    gripper = getattr(source, "gripper_cmd", 1.0)
+                    controller.set_gripper_command(gripper)
                 tau = controller.compute(r.q, r.dq, tau_meas, target_pos, target_quat)
                 cmd = np.zeros(7) if float_only else torque_command(tau, arm.gravity)
                 cost = (time.perf_counter_ns() - t0) * 1e-9

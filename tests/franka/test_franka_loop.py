@@ -52,6 +52,21 @@ def test_fr3_config_is_libfranka_limits_bounded_tick_and_guard() -> None:
     assert cfg.internal_model.learner == "numba" and cfg.guard.enabled
 
 
+@pytest.mark.parametrize(("preset", "rate", "limiter"), [
+    ("default", 1000.0 - 1e-3, "libfranka"),
+    ("paper", 1000.0 - 1e-3, "libfranka"),  # its 1000 Nm/s clip is above libfranka's
+    ("authors_real", 500.0, "per_tick_clip"),  # 0.5 Nm per tick, stricter: kept
+])
+def test_fr3_config_keeps_a_stricter_rate_limit(preset: str, rate: float, limiter: str) -> None:
+    """On an FR3 the command without gravity is limited at least as tightly as libfranka
+    (the runner applies libfranka's limitRate to every command it sends as well)."""
+    from impact_envs.control.presets import preset_config
+
+    limits = fr3_config(preset_config(preset)).limits
+    assert (limits.torque_rate_max_nm_per_s, limits.rate_limiter) == (rate, limiter)
+    assert not limits.rate_limit_includes_gravity
+
+
 def _raw_torque_steps(host: str, step_nm: float) -> str:
     """Raise joint 7's torque by ``step_nm`` per 1 ms cycle for 4 cycles and back, bypassing
     every limiter; the robot's error, or "" if none."""

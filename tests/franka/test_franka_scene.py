@@ -234,6 +234,29 @@ def test_the_sequence_goes_through_its_steps_in_order() -> None:
     assert source.gripper.sent == ["move", "grasp", "move"]
 
 
+def test_the_hand_command_the_loop_hands_to_the_controller() -> None:
+    """``gripper_cmd`` (-1 open ... +1 closed, what the runner passes to
+    ``set_gripper_command`` for the authors' gripper hold-off): open from the first opening
+    command, closed from the grasp, open again from the release."""
+    plan = PickPlacePlan(Pose(np.array([0.5, -0.1, 0.3]), DOWN),
+                         Pose(np.array([0.5, 0.1, 0.3]), DOWN),
+                         GripperCommand("grasp", 0.04), speed_m_per_s=0.5)
+    source = PickPlaceTarget(plan, _FakeGripper(True))  # type: ignore[arg-type]
+    assert source.gripper_cmd == 1.0  # nothing sent yet
+    arm = SimpleNamespace(pos_ee_world=np.array([0.5, 0.0, 0.4]))
+    source.start(arm.pos_ee_world.copy(), DOWN, arm)
+    by_step: dict[str, set[float]] = {}
+    for tick in range(20000):
+        if source.finished:
+            break
+        step = source.steps[source._index].name
+        arm.pos_ee_world, _ = source.target(tick * 1e-3, None)  # type: ignore[arg-type]
+        by_step.setdefault(step, set()).add(source.gripper_cmd)
+    assert by_step["above_pick"] == by_step["down_to_pick"] == {-1.0}
+    assert by_step["lift"] == by_step["above_place"] == by_step["down_to_place"] == {1.0}
+    assert by_step["retreat"] == {-1.0}
+
+
 def test_a_failed_grasp_retreats_and_is_named() -> None:
     source = _run_sequence(grasp_ok=False)
     names = [r.name for r in source.records]
@@ -297,3 +320,23 @@ def test_taught_pose_files_are_checked_before_connecting(tmp_path, capsys) -> No
         assert main(argv) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and message in err, err
+
+
+def test_a_policy_s_gripper_value_is_the_hand_command() -> None:
+    """PolicyTarget hands the last accepted action's ``action[9]`` (clipped to [-1, 1]) to the
+    loop; a refused action changes nothing."""
+    from impact_envs.control.lie import rot6d_from_matrix
+    from impact_franka.policy_loop import PolicyTarget
+
+    source = PolicyTarget(lambda: None, None, (np.array([0.2, -0.4, 0.1]),
+                                               np.array([0.8, 0.4, 0.8])))
+    assert source.gripper_cmd == 1.0
+    source._from = source._to = np.array([0.5, 0.0, 0.4])
+    source._q_from = source._q_to = DOWN
+    source._t0 = 0.0
+    rot6d = rot6d_from_matrix(np.diag([1.0, -1.0, -1.0]))
+    for value, expected in ((-1.0, -1.0), (0.3, 0.3), (7.0, 1.0)):
+        source._new_segment(0.1, np.concatenate([[0.5, 0.0, 0.4], rot6d, [value]]))
+        assert source.gripper_cmd == expected
+    source._new_segment(0.2, np.full(10, np.nan))  # refused
+    assert source.refused == 1 and source.gripper_cmd == 1.0
