@@ -54,7 +54,7 @@ PLANS = (
     Plan("pip install -e . && impact-eval --quick --out results/quickstart",
          substitutions=(("pip install torch==2.13.0 && pip install -e . && ", ""),),
          expect=("impact-eval: 80 episodes run",), slow=True),
-    Plan('pip install -e ".[dev]" && python -m pytest',
+    Plan('pip install -e ".[dev]" && python -m pytest -n 2',
          skip="installs packages and runs the whole suite, which holds this test"),
     Plan('print(info["success_once"], load)',
          check="assert info['success_once'] and 39.0 < load[2] < 59.0, load  # m g = 49 N"),
