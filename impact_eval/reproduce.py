@@ -34,6 +34,7 @@ from pathlib import Path
 from impact_envs.errors import InvalidArgumentError
 from impact_eval.csvio import encode_rows, file_columns, older_columns_missing, read_rows, row_key
 from impact_eval.grid import format_value
+from impact_eval.report import FLOAT_COLUMNS
 from impact_eval.reproduce_compare import (
     Cell,
     RowDiff,
@@ -92,10 +93,11 @@ def seed_scratch(table: Table, scratch: Path, cells: set[Cell]) -> None:
     kept = [row for row in read_rows(table.dir / EPISODES_CSV, older=True)
             if row_key(row)[:2] not in cells]
     missing = older_columns_missing(file_columns(table.dir / EPISODES_CSV)) or ()
-    # a table recorded before columns were added: its rows get them empty, so the sweep can
-    # resume into the scratch folder; the comparison reads only the table's own columns
-    (scratch / EPISODES_CSV).write_text(encode_rows({**row, **dict.fromkeys(missing, "")}
-                                                    for row in kept))
+    # a table recorded before columns were added: its rows get them as "not measured" (nan for
+    # a number, empty for text), so the sweep can resume into the scratch folder and its report
+    # reads them; the comparison reads only the table's own columns
+    filler = {c: "nan" if c in FLOAT_COLUMNS else "" for c in missing}
+    (scratch / EPISODES_CSV).write_text(encode_rows({**row, **filler} for row in kept))
 
 
 def _positive_int(text: str) -> int:
