@@ -37,8 +37,9 @@ from impact_envs.errors import InvalidArgumentError
 
 __all__ = ["ESTIMATOR_KINDS", "ContactGuardConfig", "ControllerConfig", "EstimatorConfig",
            "ImpedanceConfig", "InternalModelConfig", "JointLimitConfig", "LimitsConfig",
-           "PayloadModelConfig", "SaturationReleaseConfig", "SlowWrenchConfig", "TargetFilterConfig",
-           "WrenchObserverConfig", "beyond_hardware_limits", "libfranka_limits"]
+           "PayloadModelConfig", "SaturationReleaseConfig", "SlowWrenchConfig",
+           "TargetFilterConfig", "WrenchObserverConfig", "beyond_hardware_limits",
+           "libfranka_limits"]
 
 
 @dataclass(frozen=True)
