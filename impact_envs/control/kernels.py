@@ -251,8 +251,8 @@ def controller_tick(
             saturation_release_restore(tick.wrench_ff, optional_saturation_release(opt))
         _feedforward(pred, wrench_cmd, mask, guard, tick)  # w_ff, w_ff + w_cmd
     if saturation_release_on(opt):  # w_ff scaled down while a joint stays at its bound
-        saturation_release_step(lim.output, lim.params.tau_max, tick.wrench_ff,
-                                tick.wrench_cmd, tick.wrench_extra,
+        saturation_release_step(lim.output, lim.params.tau_max, dyn.pos_ee_world[2],
+                                tick.wrench_ff, tick.wrench_cmd, tick.wrench_extra,
                                 optional_saturation_release(opt))
     wrench_map_null = wrench_maps[0] if par.maps_shared else wrench_maps[1]
     impedance_law(dyn, q, dq, pos_t, quat_t, wrench_map_null, tick.wrench_extra, imp)

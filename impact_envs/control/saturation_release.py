@@ -12,11 +12,17 @@ and ``tau_max`` its bound:
 
 1. A joint is **at its bound** when ``|tau_j| >= tau_max_j - margin_nm``.
    ``at_bound_ticks`` counts the ticks some joint has been at its bound without a break (0 on
-   the first tick with none).
-2. While ``at_bound_ticks >= round(hold_s / dt)`` the scale ``s`` decays toward 0 with time
-   constant ``release_tau_s``; otherwise it returns toward 1 with ``recover_tau_s``, exactly
-   (``s <- s + (goal - s) (1 - exp(-dt / tau))``; ``s`` starts at 1).
-3. The applied feedforward is ``s * w_ff`` (all six axes; the commanded wrench ``w_cmd`` is
+   the first tick with none); the TCP height ``z`` at the start of that window is kept
+   (``z_start``).
+2. **Progress test.** When ``at_bound_ticks`` reaches ``round(hold_s / dt)``, the lift is
+   still progressing if the TCP rose at least ``rise_min_m`` since ``z_start``: then the
+   window starts again from here (``at_bound_ticks`` 0, ``z_start = z``), so a slow lift that
+   keeps rising is never released. Otherwise the lift is stalled.
+3. While ``at_bound_ticks >= round(hold_s / dt)`` (stalled and still at the bound) the scale
+   ``s`` decays toward 0 with time constant ``release_tau_s``; otherwise it returns toward 1
+   with ``recover_tau_s``, exactly (``s <- s + (goal - s) (1 - exp(-dt / tau))``; ``s``
+   starts at 1).
+4. The applied feedforward is ``s * w_ff`` (all six axes; the commanded wrench ``w_cmd`` is
    not scaled). The unscaled feedforward is kept (``ff_unscaled``) and handed back to the
    tick before it computes the next one (``saturation_release_restore``): a masked axis keeps
    its last unmasked value, which must not be scaled twice.
@@ -35,6 +41,7 @@ from numba import njit
 
 from impact_envs.control.kernel_layout import Packed, _next, layout_size
 from impact_envs.control.validation import check_positive
+from impact_envs.errors import InvalidArgumentError
 
 
 @dataclass(frozen=True)
@@ -51,6 +58,9 @@ class SaturationReleaseConfig:
             for ``hold_s`` [s].
         margin_nm: A joint counts as at its bound when |tau_cmd| >= tau_max - margin_nm [Nm]
             (0: only when the limiter clipped it).
+        rise_min_m: The TCP (world z) must rise at least this much over a hold window at the
+            bound for the lift to count as progressing, which restarts the window instead of
+            releasing [m] (0: never released while the TCP does not fall).
     """
 
     enabled: bool = False
@@ -58,12 +68,16 @@ class SaturationReleaseConfig:
     release_tau_s: float = 0.5
     recover_tau_s: float = 2.0
     margin_nm: float = 0.1
+    rise_min_m: float = 0.0
 
     def __post_init__(self) -> None:
         check_positive("saturation_release.hold_s", self.hold_s, allow_zero=True)
         check_positive("saturation_release.release_tau_s", self.release_tau_s)
         check_positive("saturation_release.recover_tau_s", self.recover_tau_s)
         check_positive("saturation_release.margin_nm", self.margin_nm, allow_zero=True)
+        if not math.isfinite(self.rise_min_m):
+            raise InvalidArgumentError(
+                f"saturation_release.rise_min_m must be finite, got {self.rise_min_m}")
 
 
 class SaturationReleaseState(NamedTuple):
@@ -75,6 +89,8 @@ class SaturationReleaseState(NamedTuple):
         release_alpha: (1,) 1 - exp(-dt / release_tau_s).
         recover_alpha: (1,) 1 - exp(-dt / recover_tau_s).
         margin_nm: (1,) the config's margin [Nm].
+        rise_min_m: (1,) the config's progress threshold [m].
+        z_start: (1,) TCP world z when the current window at the bound began [m].
         at_bound_ticks: (1,) ticks some joint has been at its bound without a break.
         scale: (1,) the scale s applied to the feedforward (1 after ``reset``).
         releases: (1,) ticks on which the release acted (at_bound_ticks >= hold_ticks)
@@ -86,6 +102,8 @@ class SaturationReleaseState(NamedTuple):
     release_alpha: np.ndarray
     recover_alpha: np.ndarray
     margin_nm: np.ndarray
+    rise_min_m: np.ndarray
+    z_start: np.ndarray
     at_bound_ticks: np.ndarray
     scale: np.ndarray
     releases: np.ndarray
@@ -99,12 +117,14 @@ def unpack_saturation_release(buf, n_joints):  # noqa: ARG001 - same signature a
     release_alpha, o = _next(buf, o, 1)
     recover_alpha, o = _next(buf, o, 1)
     margin_nm, o = _next(buf, o, 1)
+    rise_min_m, o = _next(buf, o, 1)
+    z_start, o = _next(buf, o, 1)
     at_bound_ticks, o = _next(buf, o, 1)
     scale, o = _next(buf, o, 1)
     releases, o = _next(buf, o, 1)
     ff_unscaled, o = _next(buf, o, 6)
     return SaturationReleaseState(hold_ticks, release_alpha, recover_alpha, margin_nm,
-                                  at_bound_ticks, scale, releases, ff_unscaled), o
+                                  rise_min_m, z_start, at_bound_ticks, scale, releases, ff_unscaled), o
 
 
 def make_saturation_release_state(config: SaturationReleaseConfig, dt_s: float,
@@ -114,6 +134,7 @@ def make_saturation_release_state(config: SaturationReleaseConfig, dt_s: float,
     st = unpack_saturation_release(packed.buffer, n_joints)[0]
     st.hold_ticks[0] = float(round(config.hold_s / dt_s))
     st.margin_nm[0] = config.margin_nm
+    st.rise_min_m[0] = config.rise_min_m
     st.release_alpha[0] = -math.expm1(-dt_s / config.release_tau_s)
     st.recover_alpha[0] = -math.expm1(-dt_s / config.recover_tau_s)
     st.scale[0] = 1.0
@@ -128,15 +149,23 @@ def saturation_release_restore(w_ff, st) -> None:
 
 
 @njit(cache=True)  # out of line
-def saturation_release_step(tau_last, tau_max, w_ff, w_cmd, w_extra, st) -> None:
+def saturation_release_step(tau_last, tau_max, z_tcp, w_ff, w_cmd, w_extra, st) -> None:
     """Advance the hold and the scale from the limiter's last output ``tau_last`` and bound
-    ``tau_max`` (n,) [Nm]; keep ``w_ff`` (6,) unscaled, scale it in place and write
-    ``w_extra = w_ff + w_cmd``."""
+    ``tau_max`` (n,) [Nm] and the TCP's world height ``z_tcp`` [m]; keep ``w_ff`` (6,)
+    unscaled, scale it in place and write ``w_extra = w_ff + w_cmd``."""
     at_bound = False
     for j in range(tau_last.shape[0]):
         if abs(tau_last[j]) >= tau_max[j] - st.margin_nm[0]:
             at_bound = True
-    st.at_bound_ticks[0] = st.at_bound_ticks[0] + 1.0 if at_bound else 0.0
+    if not at_bound:
+        st.at_bound_ticks[0] = 0.0
+    else:
+        if st.at_bound_ticks[0] == 0.0:
+            st.z_start[0] = z_tcp
+        st.at_bound_ticks[0] += 1.0
+        if (st.at_bound_ticks[0] == st.hold_ticks[0]
+                and z_tcp - st.z_start[0] >= st.rise_min_m[0]):
+            st.at_bound_ticks[0] = 0.0  # still rising: a new window from here
     s = st.scale[0]
     if st.at_bound_ticks[0] >= st.hold_ticks[0]:
         s -= s * st.release_alpha[0]
@@ -171,17 +200,19 @@ class SaturationRelease:
         return float(self.state.scale[0])
 
     def step(self, tau_last: np.ndarray, tau_max: np.ndarray, w_ff: np.ndarray,
-             w_cmd: np.ndarray | None = None) -> np.ndarray:
-        """One tick (``saturation_release_step``): returns ``w_ff`` scaled (a new array)."""
+             w_cmd: np.ndarray | None = None, z_tcp_m: float = 0.0) -> np.ndarray:
+        """One tick (``saturation_release_step``) with the TCP at world height ``z_tcp_m``
+        [m]: returns ``w_ff`` scaled (a new array)."""
         w = np.array(w_ff, dtype=np.float64)
         cmd = np.zeros(6) if w_cmd is None else np.asarray(w_cmd, dtype=np.float64)
         saturation_release_step(np.asarray(tau_last, dtype=np.float64),
-                                np.asarray(tau_max, dtype=np.float64), w, cmd, np.zeros(6),
+                                np.asarray(tau_max, dtype=np.float64), float(z_tcp_m), w,
+                                cmd, np.zeros(6),
                                 self.state)
         return w
 
     def reset(self) -> None:
         """Scale 1, no time at the bound, no feedforward kept."""
         st = self.state
-        st.at_bound_ticks[0], st.scale[0], st.releases[0] = 0.0, 1.0, 0.0
+        st.at_bound_ticks[0], st.scale[0], st.releases[0], st.z_start[0] = 0.0, 1.0, 0.0, 0.0
         st.ff_unscaled.fill(0.0)

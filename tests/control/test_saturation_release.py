@@ -23,10 +23,11 @@ WRIST_AT_BOUND = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 12.0, 0.0])  # joint 6 clipp
 W_FF = np.array([0.0, 0.0, 86.0, 1.0, -2.0, 0.5])
 
 
-def _release(**kw) -> SaturationRelease:
-    # dt 1 ms; hold 3 ms = 3 ticks; release tau 10 ms, recover tau 20 ms
+def _release(rise_min_m: float = 0.001, **kw) -> SaturationRelease:
+    # dt 1 ms; hold 3 ms = 3 ticks; release tau 10 ms, recover tau 20 ms; the TCP stays at
+    # z = 0 unless a test moves it, so the lift is stalled (no rise of 1 mm)
     cfg = SaturationReleaseConfig(enabled=True, hold_s=0.003, release_tau_s=0.01,
-                                  recover_tau_s=0.02, **kw)
+                                  recover_tau_s=0.02, rise_min_m=rise_min_m, **kw)
     return SaturationRelease(cfg, 0.001)
 
 
@@ -96,7 +97,7 @@ def test_the_command_is_not_scaled_and_restore_gives_the_unscaled_feedforward() 
     from impact_envs.control.saturation_release import saturation_release_step
 
     w, cmd, extra = W_FF.copy(), np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0]), np.zeros(6)
-    saturation_release_step(WRIST_AT_BOUND, TAU_MAX, w, cmd, extra, sr.state)
+    saturation_release_step(WRIST_AT_BOUND, TAU_MAX, 0.0, w, cmd, extra, sr.state)
     s = math.exp(-0.2)
     np.testing.assert_allclose(w, s * W_FF, rtol=1e-13)
     np.testing.assert_allclose(extra, s * W_FF + cmd, rtol=1e-13)
@@ -116,6 +117,7 @@ def test_off_in_every_preset_and_on_through_an_override() -> None:
     cfg = apply_overrides(ControllerConfig(), ["saturation_release.enabled=True",
                                                "saturation_release.hold_s=0.5"])
     assert cfg.saturation_release == SaturationReleaseConfig(enabled=True, hold_s=0.5)
+    assert SaturationReleaseConfig().enabled is False
 
     def stages(c):
         return OptionalStages(c.target_filter, c.observer, c.payload, c.joint_limits,
@@ -127,3 +129,29 @@ def test_off_in_every_preset_and_on_through_an_override() -> None:
     assert on.saturation_release.state.hold_ticks[0] == 500.0
     with pytest.raises(InvalidArgumentError):
         SaturationReleaseConfig(release_tau_s=0.0)
+
+
+def test_a_lift_still_rising_restarts_the_window_and_a_stalled_one_is_released() -> None:
+    sr = _release(margin_nm=0.0, rise_min_m=0.01)
+    # rising 6 mm a tick: at the end of each 3-tick window the TCP rose 12 mm >= 10 mm since
+    # the window began (z at its first tick), so the window restarts and nothing is released
+    z = 0.0
+    for _ in range(9):
+        sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF, z_tcp_m=z)
+        z += 0.006
+    assert sr.scale == 1.0 and sr.state.releases[0] == 0.0
+    assert sr.state.at_bound_ticks[0] == 0.0  # tick 9 ended the third window: restarted
+    # then stalled (rises 4 mm a tick: 8 mm over a window < 10 mm): released on its 3rd tick
+    z_first = z
+    for k in range(3):
+        sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF, z_tcp_m=z_first + 0.004 * k)
+    assert sr.scale == pytest.approx(math.exp(-0.1), rel=1e-14)
+    assert sr.state.z_start[0] == z_first
+    # once released it stays released while at the bound, even if the TCP moves up again
+    sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF, z_tcp_m=z_first + 1.0)
+    assert sr.scale == pytest.approx(math.exp(-0.2), rel=1e-14)
+
+
+def test_rise_min_must_be_finite() -> None:
+    with pytest.raises(InvalidArgumentError, match="rise_min_m"):
+        SaturationReleaseConfig(rise_min_m=math.inf)
