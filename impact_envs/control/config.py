@@ -28,6 +28,7 @@ from impact_envs.control.limits import (
     libfranka_limits,
 )
 from impact_envs.control.payload_model import PayloadModelConfig
+from impact_envs.control.saturation_release import SaturationReleaseConfig
 from impact_envs.control.slow_filter import SlowWrenchConfig
 from impact_envs.control.target_filter import TargetFilterConfig
 from impact_envs.control.validation import check_positive
@@ -36,8 +37,9 @@ from impact_envs.errors import InvalidArgumentError
 
 __all__ = ["ESTIMATOR_KINDS", "ContactGuardConfig", "ControllerConfig", "EstimatorConfig",
            "ImpedanceConfig", "InternalModelConfig", "JointLimitConfig", "LimitsConfig",
-           "PayloadModelConfig", "SlowWrenchConfig", "TargetFilterConfig",
-           "WrenchObserverConfig", "beyond_hardware_limits", "libfranka_limits"]
+           "PayloadModelConfig", "SaturationReleaseConfig", "SlowWrenchConfig",
+           "TargetFilterConfig", "WrenchObserverConfig", "beyond_hardware_limits",
+           "libfranka_limits"]
 
 
 @dataclass(frozen=True)
@@ -59,6 +61,9 @@ class ControllerConfig:
         payload: Scalar payload model along TCP z, whose output is then the feedforward
             instead of the internal model's (``payload_model.py``).
         joint_limits: Joint-limit repulsion (``joint_limits.py``).
+        saturation_release: Saturated-lift release: the feedforward scaled down while a
+            joint stays at its torque bound (``saturation_release.py``; off in every preset,
+            issue 37 item 5).
     """
 
     dt_s: float = 0.001
@@ -72,6 +77,8 @@ class ControllerConfig:
     observer: WrenchObserverConfig = field(default_factory=WrenchObserverConfig)
     payload: PayloadModelConfig = field(default_factory=PayloadModelConfig)
     joint_limits: JointLimitConfig = field(default_factory=JointLimitConfig)
+    saturation_release: SaturationReleaseConfig = field(
+        default_factory=SaturationReleaseConfig)
 
     def __post_init__(self) -> None:
         check_positive("dt_s", self.dt_s)

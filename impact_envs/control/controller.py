@@ -134,7 +134,8 @@ class ImpactController:
         self.guard = ContactGuard(cfg.guard, cfg.dt_s,
                                   min(cfg.impedance.stiffness_translational_n_per_m))
         self.optional = OptionalStages(cfg.target_filter, cfg.observer, cfg.payload,
-                                       cfg.joint_limits, cfg.dt_s)
+                                       cfg.joint_limits, cfg.dt_s,
+                                       saturation_release=cfg.saturation_release)
         # Signal arrays alias the stages' output buffers (all written in place every tick).
         w_pred = self.internal_model.wrench_pred_world
         w_ext = (self.optional.observer.wrench_world if cfg.observer.enabled

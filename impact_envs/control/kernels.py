@@ -57,10 +57,16 @@ from impact_envs.control.optional_stages import (
     optional_joint_limits,
     optional_observer,
     optional_payload,
+    optional_saturation_release,
     optional_target_filter,
+    saturation_release_on,
     target_filter_on,
 )
 from impact_envs.control.payload_model import payload_step
+from impact_envs.control.saturation_release import (
+    saturation_release_restore,
+    saturation_release_step,
+)
 from impact_envs.control.slow_filter import slow_filter_tick, unpack_slow_filter
 from impact_envs.control.target_filter import target_filter_step
 from impact_envs.control.wrench_observer import observer_update
@@ -165,8 +171,8 @@ class ControllerState(NamedTuple):
     ``lim``: the estimator's, slow filter's, contact guard's, impedance law's and limiter's
     states, each ``Packed`` (``unpack_*`` names them inside the kernel); ``model32``,
     ``weights``, ``biases``, ``model``, ``learner``: the internal model's; ``opt``: the
-    optional stages' (target filter, observer, payload model, joint limits: one buffer,
-    ``optional_stages.py``).
+    optional stages' (target filter, observer, payload model, joint limits, saturation
+    release: one buffer, ``optional_stages.py``).
     """
 
     tick: Packed
@@ -241,7 +247,13 @@ def controller_tick(
         payload_step(wrench_ext, sf.wrench_slow, dyn.rot_ee_world, pay)
         _add_command(pay.wrench_ff, wrench_cmd, tick)
     else:
+        if saturation_release_on(opt):  # the unscaled w_ff of the last tick back first
+            saturation_release_restore(tick.wrench_ff, optional_saturation_release(opt))
         _feedforward(pred, wrench_cmd, mask, guard, tick)  # w_ff, w_ff + w_cmd
+    if saturation_release_on(opt):  # w_ff scaled down while a joint stays at its bound
+        saturation_release_step(lim.output, lim.params.tau_max, dyn.pos_ee_world[2],
+                                tick.wrench_ff, tick.wrench_cmd, tick.wrench_extra,
+                                optional_saturation_release(opt))
     wrench_map_null = wrench_maps[0] if par.maps_shared else wrench_maps[1]
     impedance_law(dyn, q, dq, pos_t, quat_t, wrench_map_null, tick.wrench_extra, imp)
     if joint_limits_on(opt):  # joint-limit repulsion, added as it is

@@ -1,0 +1,157 @@
+"""The saturated-lift release (``control/saturation_release.py``, issue 37 item 5): when it
+starts, its ramp, its recovery, with hand-computed values; off in every preset."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from impact_envs.control.config import ControllerConfig
+from impact_envs.control.overrides import apply_overrides
+from impact_envs.control.saturation_release import (
+    SaturationRelease,
+    SaturationReleaseConfig,
+    saturation_release_restore,
+)
+from impact_envs.errors import InvalidArgumentError
+
+TAU_MAX = np.array([87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0])
+FREE = np.zeros(7)
+WRIST_AT_BOUND = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 12.0, 0.0])  # joint 6 clipped
+W_FF = np.array([0.0, 0.0, 86.0, 1.0, -2.0, 0.5])
+
+
+def _release(rise_min_m: float = 0.001, **kw) -> SaturationRelease:
+    # dt 1 ms; hold 3 ms = 3 ticks; release tau 10 ms, recover tau 20 ms; the TCP stays at
+    # z = 0 unless a test moves it, so the lift is stalled (no rise of 1 mm)
+    cfg = SaturationReleaseConfig(enabled=True, hold_s=0.003, release_tau_s=0.01,
+                                  recover_tau_s=0.02, rise_min_m=rise_min_m, **kw)
+    return SaturationRelease(cfg, 0.001)
+
+
+def test_release_starts_after_the_hold_and_ramps_down_exponentially() -> None:
+    sr = _release(margin_nm=0.0)
+    # ticks 1, 2: at the bound for 1, 2 ticks < 3: nothing released
+    for _ in range(2):
+        np.testing.assert_array_equal(sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF), W_FF)
+        assert sr.scale == 1.0
+    # tick 3: 3 ticks >= 3: s = 1 - (1 - e^(-1/10)) = e^(-0.1) = 0.904837418...
+    w = sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF)
+    assert sr.scale == pytest.approx(0.9048374180359595, rel=1e-14)
+    np.testing.assert_allclose(w, 0.9048374180359595 * W_FF, rtol=1e-14)
+    # 7 more ticks: s = e^(-10/10) = e^-1 (one time constant after the release began)
+    for _ in range(7):
+        sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF)
+    assert sr.scale == pytest.approx(math.exp(-0.8), rel=1e-12)
+    for _ in range(2):
+        sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF)
+    assert sr.scale == pytest.approx(math.exp(-1.0), rel=1e-12)
+    assert sr.state.releases[0] == 10.0
+    np.testing.assert_array_equal(sr.state.ff_unscaled, W_FF)  # kept unscaled
+
+
+def test_recovery_when_the_bound_clears() -> None:
+    sr = _release(margin_nm=0.0)
+    for _ in range(12):  # 10 release ticks: s = e^-1
+        sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF)
+    s0 = math.exp(-1.0)
+    # one free tick: s = 1 - (1 - s0) e^(-1/20)
+    sr.step(FREE, TAU_MAX, W_FF)
+    assert sr.scale == pytest.approx(1.0 - (1.0 - s0) * math.exp(-0.05), rel=1e-12)
+    assert sr.state.at_bound_ticks[0] == 0.0
+    # 19 more: 1 - (1 - s0) e^-1 (one recovery time constant)
+    for _ in range(19):
+        sr.step(FREE, TAU_MAX, W_FF)
+    assert sr.scale == pytest.approx(1.0 - (1.0 - s0) * math.exp(-1.0), rel=1e-12)
+    # back at the bound: the hold counts again from 0, so 2 ticks still recover
+    s1 = sr.scale
+    sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF)
+    sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF)
+    assert sr.scale == pytest.approx(1.0 - (1.0 - s1) * math.exp(-0.1), rel=1e-12)
+    sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF)  # third: released again
+    assert sr.scale < 1.0 - (1.0 - s1) * math.exp(-0.1)
+
+
+def test_a_break_restarts_the_hold_and_the_margin_and_sign_count() -> None:
+    sr = _release(margin_nm=0.1)
+    near = np.array([0.0, 0.0, 0.0, -86.95, 0.0, 0.0, 0.0])  # |tau| >= 87 - 0.1: at bound
+    below = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 11.85, 0.0])  # 11.85 < 11.9: not
+    sr.step(near, TAU_MAX, W_FF)
+    sr.step(near, TAU_MAX, W_FF)
+    assert sr.state.at_bound_ticks[0] == 2.0
+    sr.step(below, TAU_MAX, W_FF)  # a break: 0
+    assert sr.state.at_bound_ticks[0] == 0.0
+    for _ in range(2):
+        sr.step(near, TAU_MAX, W_FF)
+    assert sr.scale == 1.0
+    sr.step(near, TAU_MAX, W_FF)
+    assert sr.scale == pytest.approx(math.exp(-0.1), rel=1e-14)
+
+
+def test_the_command_is_not_scaled_and_restore_gives_the_unscaled_feedforward() -> None:
+    sr = _release(margin_nm=0.0, )
+    for _ in range(3):
+        sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF)
+    from impact_envs.control.saturation_release import saturation_release_step
+
+    w, cmd, extra = W_FF.copy(), np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0]), np.zeros(6)
+    saturation_release_step(WRIST_AT_BOUND, TAU_MAX, 0.0, w, cmd, extra, sr.state)
+    s = math.exp(-0.2)
+    np.testing.assert_allclose(w, s * W_FF, rtol=1e-13)
+    np.testing.assert_allclose(extra, s * W_FF + cmd, rtol=1e-13)
+    saturation_release_restore(w, sr.state)
+    np.testing.assert_array_equal(w, W_FF)
+    sr.reset()
+    assert (sr.scale, sr.state.at_bound_ticks[0], sr.state.releases[0]) == (1.0, 0.0, 0.0)
+    assert not sr.state.ff_unscaled.any()
+
+
+def test_off_in_every_preset_and_on_through_an_override() -> None:
+    from impact_envs.control.optional_stages import OptionalStages, saturation_release_on
+    from impact_envs.control.presets import PRESETS, preset_config
+
+    for name in PRESETS:
+        assert not preset_config(name).saturation_release.enabled, name
+    cfg = apply_overrides(ControllerConfig(), ["saturation_release.enabled=True",
+                                               "saturation_release.hold_s=0.5"])
+    assert cfg.saturation_release == SaturationReleaseConfig(enabled=True, hold_s=0.5)
+    assert SaturationReleaseConfig().enabled is False
+
+    def stages(c):
+        return OptionalStages(c.target_filter, c.observer, c.payload, c.joint_limits,
+                              c.dt_s, saturation_release=c.saturation_release)
+
+    assert not saturation_release_on(stages(ControllerConfig()).packed.buffer)
+    on = stages(cfg)
+    assert saturation_release_on(on.packed.buffer)
+    assert on.saturation_release.state.hold_ticks[0] == 500.0
+    with pytest.raises(InvalidArgumentError):
+        SaturationReleaseConfig(release_tau_s=0.0)
+
+
+def test_a_lift_still_rising_restarts_the_window_and_a_stalled_one_is_released() -> None:
+    sr = _release(margin_nm=0.0, rise_min_m=0.01)
+    # rising 6 mm a tick: at the end of each 3-tick window the TCP rose 12 mm >= 10 mm since
+    # the window began (z at its first tick), so the window restarts and nothing is released
+    z = 0.0
+    for _ in range(9):
+        sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF, z_tcp_m=z)
+        z += 0.006
+    assert sr.scale == 1.0 and sr.state.releases[0] == 0.0
+    assert sr.state.at_bound_ticks[0] == 0.0  # tick 9 ended the third window: restarted
+    # then stalled (rises 4 mm a tick: 8 mm over a window < 10 mm): released on its 3rd tick
+    z_first = z
+    for k in range(3):
+        sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF, z_tcp_m=z_first + 0.004 * k)
+    assert sr.scale == pytest.approx(math.exp(-0.1), rel=1e-14)
+    assert sr.state.z_start[0] == z_first
+    # once released it stays released while at the bound, even if the TCP moves up again
+    sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF, z_tcp_m=z_first + 1.0)
+    assert sr.scale == pytest.approx(math.exp(-0.2), rel=1e-14)
+
+
+def test_rise_min_must_be_finite() -> None:
+    with pytest.raises(InvalidArgumentError, match="rise_min_m"):
+        SaturationReleaseConfig(rise_min_m=math.inf)
