@@ -36,6 +36,7 @@ from impact_envs.control.impedance_config import ImpedanceConfig
 from impact_envs.control.joint_limits import JointLimitConfig
 from impact_envs.control.limits import LimitsConfig
 from impact_envs.control.payload_model import PayloadModelConfig
+from impact_envs.control.saturation_release import SaturationReleaseConfig
 from impact_envs.control.slow_filter import SlowWrenchConfig
 from impact_envs.control.target_filter import TargetFilterConfig
 from impact_envs.control.wrench_observer import WrenchObserverConfig
@@ -108,5 +109,6 @@ def authors_config(robot: bool) -> ControllerConfig:
             rate_limiter="per_tick_clip",  # torque_rate_saturation.hpp 19-26 (CPP 635-638)
             rate_limit_includes_gravity=not robot),  # SIM 13: gravity in tau_d (CPP 327-330)
         guard=ContactGuardConfig(enabled=False),  # not theirs (and unused: no internal model)
+        saturation_release=SaturationReleaseConfig(enabled=False),  # ours (issue 37 item 5)
     )
     return _optional(config, robot)

@@ -62,8 +62,8 @@ class ControllerConfig:
             instead of the internal model's (``payload_model.py``).
         joint_limits: Joint-limit repulsion (``joint_limits.py``).
         saturation_release: Saturated-lift release: the feedforward scaled down while a
-            joint stays at its torque bound (``saturation_release.py``; off in every preset,
-            issue 37 item 5).
+            joint stays at its torque bound and the lift does not rise
+            (``saturation_release.py``; on in ``default``, issue 37 item 5).
     """
 
     dt_s: float = 0.001

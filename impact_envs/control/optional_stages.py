@@ -173,8 +173,8 @@ class OptionalStages:
                  n_joints: int = 7,
                  saturation_release: SaturationReleaseConfig | None = None) -> None:
         """Build the five stages from their configs at control period ``dt_s`` [s]
-        (``saturation_release`` None: its default, off)."""
-        saturation_release = saturation_release or SaturationReleaseConfig()
+        (``saturation_release`` None: off, as the other four stages' defaults are)."""
+        saturation_release = saturation_release or SaturationReleaseConfig(enabled=False)
         sizes = (make_target_filter_state(target_filter, n_joints).buffer.shape[0],
                  make_observer_state(observer, n_joints).buffer.shape[0],
                  make_payload_state(payload, dt_s, n_joints).buffer.shape[0],

@@ -38,6 +38,7 @@ DEPARTURES: dict[str, str] = {
     "limits.rate_limiter": "per_tick_clip",
     "limits.torque_rate_max_nm_per_s": "1000.0",
     "internal_model.learner": "numpy",
+    "saturation_release.enabled": "False",
 }
 """Fields where ``default`` differs from ``paper``, with the paper's value (``SECTION.FIELD``
 keys, the syntax of ``--controller-set``; ``revert_departure`` applies one)."""

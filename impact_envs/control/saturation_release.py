@@ -1,5 +1,5 @@
-"""Saturated-lift release (issue 37 item 5; off in every preset): stop asking for a lift the
-arm cannot give.
+"""Saturated-lift release (issue 37 item 5; on in ``default``, off in ``paper`` and the
+authors' presets): stop asking for a lift the arm cannot give.
 
 Why: with a load whose moment about the wrist exceeds the wrist's torque (Hammer, 8.5-10 kg;
 joint 6's bound is 12 Nm), the learned feedforward keeps asking for the lift, a joint sits at
@@ -27,7 +27,10 @@ and ``tau_max`` its bound:
    tick before it computes the next one (``saturation_release_restore``): a masked axis keeps
    its last unmasked value, which must not be scaled twice.
 
-``enabled=False`` (every preset): the tick never names this stage (``optional_stages.py``).
+``enabled=False`` (``paper``, ``authors_sim``, ``authors_real``): the tick never names this
+stage (``optional_stages.py``). ``default``'s values (hold 0.5 s, release 0.25 s, recover 2 s,
+margin 0.1 Nm, rise 10 mm) were chosen on tuning seeds and ablated on the reference seeds
+(docs/controller.md, "Saturated-lift release").
 """
 
 from __future__ import annotations
@@ -50,7 +53,7 @@ class SaturationReleaseConfig:
     bound.
 
     Attributes:
-        enabled: Run it (default False: every preset leaves the feedforward as it was).
+        enabled: Run it (True in ``default``; ``paper`` and the authors' presets: False).
         hold_s: Time a joint must stay at its bound, without a break, before the release
             starts [s].
         release_tau_s: Time constant of the scale's decay toward 0 while released [s].
@@ -63,12 +66,12 @@ class SaturationReleaseConfig:
             releasing [m] (0: never released while the TCP does not fall).
     """
 
-    enabled: bool = False
-    hold_s: float = 1.0
-    release_tau_s: float = 0.5
+    enabled: bool = True
+    hold_s: float = 0.5
+    release_tau_s: float = 0.25
     recover_tau_s: float = 2.0
     margin_nm: float = 0.1
-    rise_min_m: float = 0.0
+    rise_min_m: float = 0.01
 
     def __post_init__(self) -> None:
         check_positive("saturation_release.hold_s", self.hold_s, allow_zero=True)
@@ -124,7 +127,8 @@ def unpack_saturation_release(buf, n_joints):  # noqa: ARG001 - same signature a
     releases, o = _next(buf, o, 1)
     ff_unscaled, o = _next(buf, o, 6)
     return SaturationReleaseState(hold_ticks, release_alpha, recover_alpha, margin_nm,
-                                  rise_min_m, z_start, at_bound_ticks, scale, releases, ff_unscaled), o
+                                  rise_min_m, z_start, at_bound_ticks, scale, releases,
+                                  ff_unscaled), o
 
 
 def make_saturation_release_state(config: SaturationReleaseConfig, dt_s: float,

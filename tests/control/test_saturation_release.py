@@ -108,23 +108,24 @@ def test_the_command_is_not_scaled_and_restore_gives_the_unscaled_feedforward() 
     assert not sr.state.ff_unscaled.any()
 
 
-def test_off_in_every_preset_and_on_through_an_override() -> None:
+def test_on_in_default_only_and_off_through_an_override() -> None:
     from impact_envs.control.optional_stages import OptionalStages, saturation_release_on
     from impact_envs.control.presets import PRESETS, preset_config
 
     for name in PRESETS:
-        assert not preset_config(name).saturation_release.enabled, name
-    cfg = apply_overrides(ControllerConfig(), ["saturation_release.enabled=True",
-                                               "saturation_release.hold_s=0.5"])
-    assert cfg.saturation_release == SaturationReleaseConfig(enabled=True, hold_s=0.5)
-    assert SaturationReleaseConfig().enabled is False
+        assert preset_config(name).saturation_release.enabled == (name == "default"), name
+    assert ControllerConfig().saturation_release == SaturationReleaseConfig(
+        enabled=True, hold_s=0.5, release_tau_s=0.25, recover_tau_s=2.0, margin_nm=0.1,
+        rise_min_m=0.01)
+    cfg = apply_overrides(ControllerConfig(), ["saturation_release.enabled=False"])
+    assert not cfg.saturation_release.enabled
 
     def stages(c):
         return OptionalStages(c.target_filter, c.observer, c.payload, c.joint_limits,
                               c.dt_s, saturation_release=c.saturation_release)
 
-    assert not saturation_release_on(stages(ControllerConfig()).packed.buffer)
-    on = stages(cfg)
+    assert not saturation_release_on(stages(cfg).packed.buffer)
+    on = stages(ControllerConfig())
     assert saturation_release_on(on.packed.buffer)
     assert on.saturation_release.state.hold_ticks[0] == 500.0
     with pytest.raises(InvalidArgumentError):
