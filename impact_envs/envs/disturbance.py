@@ -89,6 +89,12 @@ class DisturbanceEnv(ImpactEnv):
       2026-11-26: ``estimator`` removed from the constructor (no number changes): the
       wrench estimator is a field of the controller's config, chosen with
       ``controller_preset=preset_config("default", estimator="momentum")``.
+      2026-11-27: ``controller_preset`` also takes ``"authors_sim"`` and ``"authors_real"``
+      (the paper authors' released controller) and ``RobotOptions`` gains ``torque_reading``
+      (default ``"link_side"``, unchanged). The ``default`` preset gains the saturated-lift
+      release (docs/controller.md): with a load the wrist cannot hold, the learned
+      feedforward is let go after 0.5 s at a torque bound without the load rising; episodes
+      that never stall at a bound are unchanged bit for bit, ``paper`` is unchanged.
     """
 
     @classmethod

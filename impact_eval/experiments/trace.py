@@ -7,7 +7,8 @@ Usage::
 
 Columns: policy step, TCP height, commanded target height, gripper command, object height,
 internal-model prediction / slow estimate / raw estimate of the vertical wrench [N], gate
-state. The last line counts, per joint, the policy steps whose final torque sat at the FR3
+state, the saturated-lift release's scale on the feedforward (``rel_s``, 1 when it does not
+act) and the largest robot-table contact force of the step (``hand_n`` [N]). The last line counts, per joint, the policy steps whose final torque sat at the FR3
 limit (87 / 12 Nm). The traces quoted in docs/results.md come from this command. Calligraphy
 adds the writing summary (force in band, stroke RMS) on the last line.
 ``--no-joint-friction`` zeroes the arm joints' Coulomb friction in the simulated plant (an
@@ -27,7 +28,7 @@ from impact_envs.policies.interface import stack_obs
 from impact_eval.envs import check_env_id, describe_env, make_env
 from impact_eval.methods import resolve_method
 
-HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate"
+HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate  rel_s  hand_n"
 
 
 def trace(env_id: str, method: str, value: float, seed: int, every: int,
@@ -38,6 +39,7 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
                    robot=spec.robot)  # impact_authors: the commanded torque reading
     limit = np.asarray(env.unwrapped.controller.config.limits.torque_max_nm)
     saturated = np.zeros(len(limit), dtype=int)
+    release = env.unwrapped.controller.optional.saturation_release
     if not joint_friction:
         sim = env.unwrapped.sim
         sim.model.dof_frictionloss[sim.arm_dof] = 0.0
@@ -58,7 +60,8 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
                 f"{step:4d} {obs['ee_pos'][2]:6.3f} {action[2]:6.3f} {action[9]:5.2f} "
                 f"{obs['object_pos'][2]:6.3f} {info['wrench_pred_world'][2]:7.1f} "
                 f"{info['wrench_slow_world'][2]:7.1f} {info['wrench_ext_world'][2]:7.1f} "
-                f"{int(info['gate_open']):5d}")
+                f"{int(info['gate_open']):5d} {release.scale:6.2f} "
+                f"{info['peak_robot_contact_force_n']:7.1f}")
         step += 1
     end = (f"success: {bool(info['is_success'])} after {step} steps; steps ending at a joint "
            f"torque limit, joints 1-7: {saturated.tolist()}")
