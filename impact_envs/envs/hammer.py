@@ -61,8 +61,9 @@ class HammerEnv(ImpactEnv):
     ## Arguments
     ``controller`` ("impact" | "impedance"), ``object_mass`` [kg] (default 0.2, range
     0.05–12), ``controller_preset`` ("default" | "paper" | "authors_sim" | "authors_real",
-    docs/controller.md, or a ``ControllerConfig``, e.g. ``preset_config("default", estimator="momentum")`` for the
-    momentum-observer wrench estimator; reported as
+    docs/controller.md, or a ``ControllerConfig``, e.g.
+    ``preset_config("default", estimator="momentum")`` for the momentum-observer wrench
+    estimator; reported as
     ``info["controller_preset"]``, a config as its preset's name or "custom"), ``robot``
     (``RobotOptions``: ``sensor_noise`` bool, ``grasp_force_n`` default 70 N,
     ``model_mass_error`` relative error of the controller's link masses),

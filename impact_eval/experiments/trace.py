@@ -8,9 +8,10 @@ Usage::
 Columns: policy step, TCP height, commanded target height, gripper command, object height,
 internal-model prediction / slow estimate / raw estimate of the vertical wrench [N], gate
 state, the saturated-lift release's scale on the feedforward (``rel_s``, 1 when it does not
-act) and the largest robot-table contact force of the step (``hand_n`` [N]). The last line counts, per joint, the policy steps whose final torque sat at the FR3
-limit (87 / 12 Nm). The traces quoted in docs/results.md come from this command. Calligraphy
-adds the writing summary (force in band, stroke RMS) on the last line.
+act) and the largest robot-table contact force of the step (``hand_n`` [N]). The last line
+counts, per joint, the policy steps whose final torque sat at the FR3 limit (87 / 12 Nm).
+The traces quoted in docs/results.md come from this command. Calligraphy adds the writing
+summary (force in band, stroke RMS) on the last line.
 ``--no-joint-friction`` zeroes the arm joints' Coulomb friction in the simulated plant (an
 ablation of the robot, not of the controller), to see what the friction dead-band costs.
 """
