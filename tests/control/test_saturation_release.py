@@ -1,5 +1,6 @@
 """The saturated-lift release (``control/saturation_release.py``, issue 37 item 5): when it
-starts, its ramp, its recovery, with hand-computed values; off in every preset."""
+starts, its ramp, its recovery and its progress test, with hand-computed values; on in
+``default`` only."""
 
 from __future__ import annotations
 
