@@ -189,6 +189,10 @@ class ImpactController:
             self.internal_model.reinitialize()
         self.signals.clear()
         self._is_reset = True
+        if self._tick_entry is None:  # resolve the compiled tick now, not in the first tick
+            self._entry(self._kernel_args(q0, self._zeros7, self._zeros7, np.zeros(3),
+                                          np.array([1.0, 0.0, 0.0, 0.0]), None,
+                                          self.internal_model.mask_array(None), 0.0))
 
     def compute(
         self,
@@ -271,7 +275,8 @@ class ImpactController:
                 dynamics_arrays(dyn))
 
     def _entry(self, args: tuple) -> Any:
-        """``controller_tick`` compiled for these argument types, resolved on the first tick:
+        """``controller_tick`` compiled for these argument types, resolved by the first ``reset``
+        (the type lookup costs ~1.2 ms once, more than a tick's budget):
         calling it skips numba's per-call type dispatch (tens of microseconds for the named
         state; the closed loop does the same). The inputs are C-contiguous float64 arrays
         (``_kernel_args``), the state's arrays are this controller's own: the types never

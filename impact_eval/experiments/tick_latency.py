@@ -23,6 +23,7 @@ import argparse
 import gc
 import json
 import platform
+import sys
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -100,8 +101,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if not (args.seconds > 0 and args.switch_s > 0):
         parser.error(f"--seconds {args.seconds} / --switch-s {args.switch_s}: valid: > 0")
+    given = sys.argv[1:] if argv is None else argv
     report: dict[str, object] = {"command": "python -m impact_eval.experiments.tick_latency "
-                                 + " ".join(argv or []), "machine": platform.processor()
+                                 + " ".join(given), "machine": platform.processor()
                                  or platform.machine(), "seconds": args.seconds}
     print("| learner | ticks | SGD steps | p50 [us] | p99 [us] | p99.9 [us] | max [us] | > 0.3 ms "
           "| > 0.8 ms | learning ticks p99.9 [us] | learning ticks max [us] | budget met |")
