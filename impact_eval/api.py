@@ -56,6 +56,19 @@ def _check_int(name: str, value: object, low: int) -> int:
     return int(value)
 
 
+def grid_or_bins(values: object) -> tuple[str | None, str | None]:
+    """``values`` as ``(grid, mass_bins)`` request text: numbers give a grid, ``(lo, hi)``
+    pairs give bins (``bins.parse_bins`` then checks their order and overlap)."""
+    if (isinstance(values, (Sequence, np.ndarray)) and not isinstance(values, (str, bytes))
+            and len(values) and all(isinstance(v, (tuple, list)) for v in values)):
+        if any(len(v) != 2 for v in values):
+            raise InvalidArgumentError(
+                f"invalid bins {values!r}; valid: (lo, hi) pairs, e.g. [(0.1, 0.3), (0.3, 0.5)]")
+        edges = [check_values(list(v)) for v in values]
+        return None, ",".join(f"{format_value(lo)}-{format_value(hi)}" for lo, hi in edges)
+    return ",".join(format_value(v) for v in check_values(values)), None
+
+
 def check_values(values: object) -> list[float]:
     """``values`` as a non-empty list of finite real numbers (strings and bools refused)."""
     if isinstance(values, (str, bytes)) or not isinstance(values, (Sequence, np.ndarray)):
@@ -160,6 +173,8 @@ def evaluate(
         policy: The policy, or a factory of it (see ``PolicySource``).
         env_id: A registered env id (``"IMPACT/Hammer-v0"``; ``"module:ID"`` imports module).
         values: Parameter values, e.g. masses [kg]; each is one cell of ``episodes`` episodes.
+            Or mass bins as ``(lo, hi)`` pairs [kg], ``[lo, hi)`` each: every episode draws
+            its value in its bin from its seed (``impact-eval --mass-bins``).
         out: Output directory: ``episodes.csv``, ``summary.csv``, ``run.json``, ``plots/``.
         episodes: Episodes per value (paired seeds, as the CLI's).
         controller: ``"impact"`` or ``"impedance"``.
@@ -189,14 +204,14 @@ def evaluate(
     from impact_eval.prepare import SweepRequest, prepare
 
     build = _policy_factory(policy)
-    numbers = check_values(values)
+    grid, mass_bins = grid_or_bins(values)
     check_choice("controller", controller, CONTROLLERS)
     check_choice("controller_preset", controller_preset, PRESETS)
     if not isinstance(env_id, str):
         raise InvalidArgumentError(f"invalid env_id {env_id!r}; valid: a registered env id")
     request = SweepRequest(
         env_id=env_id, methods=_check_name(name),
-        grid=",".join(format_value(v) for v in numbers), param=param,
+        grid=grid, mass_bins=mass_bins, param=param,
         episodes=_check_int("episodes", episodes, 1), out=Path(out), workers=1,
         envs_per_worker=_check_int("envs_per_worker", envs_per_worker, 1),
         seed=_check_int("seed", seed, 0), resume=bool(resume),
@@ -207,7 +222,8 @@ def evaluate(
                       observation=options if options.uses_images else None)
     with temporary_method(spec):
         plan = prepare(request)
-        args = {"env": env_id, "method": name, "grid": request.grid, "param": param,
+        args = {"env": env_id, "method": name, "grid": request.grid,
+                "mass_bins": request.mass_bins, "param": param,
                 "episodes": episodes, "out": str(out), "seed": seed, "controller": controller,
                 "controller_preset": controller_preset}
         if spec.observation is not None:

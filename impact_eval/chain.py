@@ -24,12 +24,12 @@ import dataclasses
 from collections.abc import Callable, Set
 from typing import TYPE_CHECKING
 
-from impact_eval.grid import episode_seed, format_value
+from impact_eval.grid import format_value
 from impact_eval.rollout import EpisodeJob, LockstepBatch
 
 if TYPE_CHECKING:
     from impact_eval.methods import MethodSpec
-    from impact_eval.sweep import EpisodeBatch, RowSink, Worker
+    from impact_eval.sweep import EpisodeBatch, RowSink, SweepConfig, Worker
 
 CRASHED = ("unstable", "exception")
 """``failure_reason`` prefixes of an episode that raised: it carries no state on."""
@@ -37,12 +37,13 @@ CRASHED = ("unstable", "exception")
 Jobs = tuple[EpisodeJob, ...]
 
 
-def chain_jobs(seed: int, value_index: int, value: float, episodes: int, method: str,
+def chain_jobs(cfg: SweepConfig, value_index: int, method: str,
                done: Set[tuple[str, str, int]]) -> tuple[Jobs, Jobs]:
     """(chain, to write) of a carried cell: every episode from 0 to the last one not in
     ``done`` (keys as ``csvio.row_key``), and those of them not in ``done``; both empty when
     the cell is complete."""
-    jobs = [EpisodeJob(value, episode_seed(seed, value_index, e), e) for e in range(episodes)]
+    jobs = [cfg.job(value_index, e) for e in range(cfg.episodes)]
+    value = cfg.values[value_index]
     todo = tuple(j for j in jobs if (method, format_value(value), j.episode) not in done)
     if not todo:
         return (), ()

@@ -84,6 +84,13 @@ def sweep_parser() -> argparse.ArgumentParser:
         "start:stop:step (stop included when on the grid) or a comma list",
     )
     grid.add_argument("--param-values", dest="grid", metavar="GRID", help="same as --masses")
+    grid.add_argument(
+        "--mass-bins",
+        metavar="BINS",
+        help="bins [LO, HI) of the env's parameter instead of fixed values, e.g. "
+        "0.1-0.3,0.3-0.5,0.5-1: each episode draws its value uniformly in its bin from its "
+        "seed (episodes.csv: drawn_mass_kg; param_value is the bin's LO)",
+    )
     _add_run_options(p)
     _add_executor_options(p)
     return p
@@ -203,13 +210,13 @@ def _with_defaults(a: argparse.Namespace) -> argparse.Namespace:
     """Fill ``--quick`` defaults, or insist on the options a sweep needs."""
     if a.quick:
         for key, value in QUICK_DEFAULTS.items():
-            if getattr(a, key) is None:
+            if getattr(a, key) is None and not (key == "grid" and a.mass_bins is not None):
                 setattr(a, key, value)
         if a.method is None:
             a.method = quick_methods(a.env)
     missing = [f"--{k}" for k in ("env", "method", "out") if getattr(a, k) is None]
-    if a.grid is None:
-        missing.append("--masses/--param-values")
+    if a.grid is None and a.mass_bins is None:
+        missing.append("--masses/--param-values/--mass-bins")
     if missing:
         raise InvalidArgumentError(
             f"missing {', '.join(missing)}; give them or use --quick (see {PROG} --help)"
@@ -259,6 +266,7 @@ def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
         beyond_hardware_limits=a.beyond_hardware_limits,
         executor=a.executor,
         ray_address=a.ray_address,
+        mass_bins=a.mass_bins,
     )
     plan = prepare(request)
     t0 = time.perf_counter()

@@ -35,6 +35,7 @@ def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict
             "env": cfg.env_id,
             "param_name": cfg.param_name,
             "values": list(cfg.values),
+            "bin_highs": list(cfg.bin_highs),
             "methods": list(cfg.methods),
             "controller_overrides": list(cfg.controller_overrides),
             "method_controllers": plan.identity.method_controllers,

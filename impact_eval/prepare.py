@@ -16,6 +16,7 @@ from impact_envs.control.overrides import apply_overrides
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.parallel import check_executor
 from impact_eval import csvio, runinfo
+from impact_eval.bins import bin_param_name, parse_bins
 from impact_eval.envs import (
     EnvInfo,
     check_env_id,
@@ -38,7 +39,7 @@ class SweepRequest:
 
     env_id: str
     methods: str
-    grid: str
+    grid: str | None
     param: str | None
     episodes: int
     out: Path
@@ -57,6 +58,9 @@ class SweepRequest:
     """``--executor``: ``local`` or ``ray``."""
     ray_address: str | None = None
     """``--ray-address`` (``--executor ray`` only)."""
+    mass_bins: str | None = None
+    """``--mass-bins LO-HI,...`` instead of ``grid`` (``bins.py``): each episode draws the
+    parameter in its bin."""
 
 
 @dataclass(frozen=True)
@@ -110,7 +114,8 @@ def check_out_dir(out: Path) -> None:
         raise InvalidArgumentError(f"--out {out} is not writable: {exc}") from None
 
 
-def load_done(req: SweepRequest, env: EnvInfo, values: list[float]) -> set[csvio.EpisodeKey]:
+def load_done(req: SweepRequest, env: EnvInfo, values: list[float],
+              row_param_name: str) -> set[csvio.EpisodeKey]:
     """Cells already in ``episodes.csv`` (``--resume``), checked against this grid's seeds."""
     path = req.out / EPISODES_CSV
     if not path.exists() or path.stat().st_size == 0:  # 0 bytes: the writer starts it afresh
@@ -124,7 +129,7 @@ def load_done(req: SweepRequest, env: EnvInfo, values: list[float]) -> set[csvio
     done = set()
     for row in csvio.read_rows(path):
         key = csvio.row_key(row)
-        if row["env_id"] != env.env_id or row["param_name"] != env.param_name:
+        if row["env_id"] != env.env_id or row["param_name"] != row_param_name:
             raise InvalidArgumentError(
                 f"cannot resume: {path} holds {row['env_id']}/{row['param_name']} episodes"
             )
@@ -195,6 +200,18 @@ def _build_policies(req: SweepRequest, specs: list[MethodSpec], env_id: str) -> 
             env.close()
 
 
+def sweep_values(req: SweepRequest) -> tuple[list[float], tuple[float, ...]]:
+    """(values, bin upper edges): the grid's values and no edges, or with ``--mass-bins``
+    the bins' lower edges and their upper edges."""
+    if req.mass_bins is None:
+        return parse_grid(req.grid), ()
+    if req.grid is not None:
+        raise InvalidArgumentError(
+            "give either a grid (--masses/--param-values) or --mass-bins, not both")
+    bins = parse_bins(req.mass_bins)
+    return [b.lo for b in bins], tuple(b.hi for b in bins)
+
+
 def prepare(req: SweepRequest) -> Plan:
     """Validate a sweep request without creating any file."""
     check_numbers(req)
@@ -212,10 +229,10 @@ def prepare(req: SweepRequest) -> Plan:
         from impact_eval.video import require_video
 
         require_video()
-    values = parse_grid(req.grid)
+    values, highs = sweep_values(req)
     check_env_id(req.env_id)  # imports the env's module, which may register methods too
     specs = parse_methods(req.methods)
-    info = _inspect_env(req, specs, values)
+    info = _inspect_env(req, specs, sorted({*values, *highs}))  # a bin's edges: both accepted
     check_out_dir(req.out)
     continuing = req.resume or req.extend
     previous = runinfo.read_run_json(req.out) if continuing else None
@@ -223,13 +240,14 @@ def prepare(req: SweepRequest) -> Plan:
         env=req.env_id, seed=req.seed, param_name=info.param_name,
         controller_overrides=tuple(req.controller_overrides),
         methods=tuple(s.name for s in specs), values=tuple(values), episodes=req.episodes,
-        method_controllers={s.name: s.settings for s in specs})
+        method_controllers={s.name: s.settings for s in specs}, bin_highs=highs)
     if continuing:
         csv_path = req.out / EPISODES_CSV
         has_rows = csv_path.exists() and bool(csvio.read_rows(csv_path))
         runinfo.check_resumable(runinfo.recorded_identity(req.out), identity,
                                 extend=req.extend, has_rows=has_rows)
-    done = load_done(req, info, values)
+    row_param = bin_param_name(info.param_name) if highs else info.param_name
+    done = load_done(req, info, values, row_param)
     _build_policies(req, specs, info.env_id)
     config = SweepConfig(
         env_id=req.env_id,
@@ -247,6 +265,7 @@ def prepare(req: SweepRequest) -> Plan:
         video_dir=str(req.out / "videos"),
         executor=req.executor,
         ray_address=req.ray_address,
+        bin_highs=highs,
     )
     return Plan(config=config, env=info, out=req.out, done=done, previous_run=previous,
                 identity=identity)

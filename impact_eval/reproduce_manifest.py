@@ -44,9 +44,10 @@ def sha256(path: Path) -> str:
 
 def sweep_argv(args: dict) -> list[str]:
     """The impact-eval arguments that define a table's rows (no output or executor options)."""
-    argv = ["--env", args["env"], "--method", ",".join(args["methods"]),
-            "--param-values", args["grid"], "--episodes", str(args["episodes"]),
-            "--seed", str(args["seed"])]
+    values = (["--mass-bins", args["mass_bins"]] if args.get("mass_bins")
+              else ["--param-values", args["grid"]])
+    argv = ["--env", args["env"], "--method", ",".join(args["methods"]), *values,
+            "--episodes", str(args["episodes"]), "--seed", str(args["seed"])]
     if args.get("param"):
         argv += ["--param", args["param"]]
     for override in args.get("controller_overrides") or ():

@@ -24,6 +24,9 @@ class EpisodeJob:
     value: float
     seed: int
     episode: int
+    reset_value: float | None = None
+    """What the env's reset gets for the parameter; None: ``value`` (a mass bin's episode:
+    its drawn mass, ``value`` being the bin's lower edge; ``bins.draw_in_bin``)."""
 
 
 FinishCallback = Callable[[int, dict[str, object]], None]
@@ -117,7 +120,8 @@ class LockstepBatch:
     ) -> dict[str, np.ndarray]:
         """Reset env ``i`` for ``job``; a failing reset ends the episode at length 0."""
         try:
-            obs, info = self.envs[i].reset(seed=job.seed, options={self.param_name: job.value})
+            value = job.value if job.reset_value is None else job.reset_value
+            obs, info = self.envs[i].reset(seed=job.seed, options={self.param_name: value})
             tracker.start(info)  # the mass and robot profile the env set up
             if not obs_is_finite(obs):
                 raise SimulationError("non-finite observation after reset")

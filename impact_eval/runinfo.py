@@ -161,9 +161,11 @@ class RunIdentity:
     method_controllers: dict[str, dict[str, object]] = field(default_factory=dict)
     """Per method: env controller, preset and warm start (a name that now means another
     controller cannot resume the earlier rows)."""
+    bin_highs: tuple[float, ...] = ()
+    """``--mass-bins``: each bin's upper edge (``values``: their lower edges); empty: a grid."""
 
 
-_EXTENDABLE = ("methods", "values")
+_EXTENDABLE = ("methods", "values", "bin_highs")
 REQUIRED_KEYS = ("env", "seed", "methods", "values", "episodes")
 """Keys without which a recorded identity cannot be checked (then ``--resume`` refuses)."""
 
@@ -201,7 +203,7 @@ def check_resumable(recorded: dict | None, now: RunIdentity, extend: bool = Fals
             raise InvalidArgumentError(
                 f"cannot extend: methods {missing} of the run are missing; --extend keeps "
                 f"every earlier method (run.json: {was!r})")
-        if extend and key == "values":
+        if extend and key in ("values", "bin_highs"):
             if now_list[:len(was)] == was:
                 continue
             raise InvalidArgumentError(

@@ -21,6 +21,7 @@ from tqdm import tqdm
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.parallel import single_threaded_children, single_threaded_torch
 from impact_envs.policies.interface import Policy
+from impact_eval.bins import bin_param_name, draw_in_bin
 from impact_eval.chain import chain_jobs, run_chain
 from impact_eval.grid import episode_seed, format_value
 from impact_eval.methods import MethodSpec, resolve_method
@@ -59,6 +60,24 @@ class SweepConfig:
     """``local`` (this machine's processes, ``workers`` of them) or ``ray`` (``sweep_ray``)."""
     ray_address: str | None = None
     """Ray cluster to join (``--ray-address``; None: ``$RAY_ADDRESS`` or a new local one)."""
+    bin_highs: tuple[float, ...] = ()
+    """``--mass-bins``: each bin's upper edge, ``values`` holding the lower edges (``bins.py``);
+    empty: ``values`` is a grid of fixed values."""
+
+    @property
+    def row_param_name(self) -> str:
+        """``param_name`` as the rows carry it (``object_mass_bin`` for a bin sweep)."""
+        return bin_param_name(self.param_name) if self.bin_highs else self.param_name
+
+    def job(self, value_index: int, episode: int) -> EpisodeJob:
+        """Episode ``episode`` of the cell at ``values[value_index]``: its paired seed, and in a
+        bin sweep the mass it draws in its bin."""
+        value = self.values[value_index]
+        seed = episode_seed(self.seed, value_index, episode)
+        if not self.bin_highs:
+            return EpisodeJob(value, seed, episode)
+        return EpisodeJob(value, seed, episode,
+                          draw_in_bin(value, self.bin_highs[value_index], seed))
 
 
 @dataclass(frozen=True)
@@ -89,11 +108,10 @@ def plan_tasks(cfg: SweepConfig, done: set[tuple[str, str, int]]) -> list[Episod
             for method in cfg.methods:
                 if method not in carried:
                     tasks.append(EpisodeBatch(method, value, tuple(
-                        EpisodeJob(value, episode_seed(cfg.seed, vi, e), e)
-                        for e in range(start, min(start + size, cfg.episodes))
+                        cfg.job(vi, e) for e in range(start, min(start + size, cfg.episodes))
                         if (method, format_value(value), e) not in done)))
                 elif start == 0:
-                    chain, todo = chain_jobs(cfg.seed, vi, value, cfg.episodes, method, done)
+                    chain, todo = chain_jobs(cfg, vi, method, done)
                     tasks.append(EpisodeBatch(method, value, todo, chain))
     return [task for task in tasks if task.jobs]
 
@@ -160,7 +178,7 @@ class Worker:
     def row(self, method: str, job: EpisodeJob, metrics: dict[str, object]) -> dict[str, object]:
         """The CSV row of ``job``'s finished episode."""
         return {"method": method, "env_id": self.cfg.canonical_env_id,
-                "param_name": self.cfg.param_name, "param_value": job.value, "seed": job.seed,
+                "param_name": self.cfg.row_param_name, "param_value": job.value, "seed": job.seed,
                 "episode": job.episode, **metrics}
 
     def _videos(self, task: EpisodeBatch) -> dict[int, object]:
