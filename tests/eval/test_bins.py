@@ -136,3 +136,20 @@ def test_evaluate_takes_bins_as_pairs(tmp_path: Path) -> None:
     assert set(rows["param_name"]) == {"object_mass_bin"} and len(rows) == 6
     with pytest.raises(InvalidArgumentError, match="valid: \\(lo, hi\\) pairs"):
         evaluate(lambda _id, _env: FakePolicy(0.9), ENV_ID, [(0.5, 1.5, 2.0)], tmp_path / "x")
+
+
+def test_reproduce_reruns_a_bin_table_from_its_recorded_bins(tmp_path: Path) -> None:
+    """``reproduce`` rebuilds the sweep's arguments from run.json: the bins, not a grid."""
+    import json
+
+    from impact_eval.reproduce_manifest import sweep_argv
+
+    assert main(_args(tmp_path / "run", "0.5-1.5,1.5-4")) == 0
+    args = json.loads((tmp_path / "run" / "run.json").read_text())["args"]
+    argv = sweep_argv(args)
+    assert argv[argv.index("--mass-bins") + 1] == "0.5-1.5,1.5-4"
+    assert "--param-values" not in argv and args["bin_highs"] == [1.5, 4.0]
+    assert main([*argv, "--workers", "1", "--envs-per-worker", "2",
+                 "--out", str(tmp_path / "again")]) == 0
+    assert ((tmp_path / "again" / "episodes.csv").read_bytes()
+            == (tmp_path / "run" / "episodes.csv").read_bytes())
