@@ -86,9 +86,9 @@ class ImpactEnv(gym.Env):
         self.persist_internal_model = bool(persist_internal_model)
         self.task = task = self.make_task() if task is None else load_task(task)
         noise = SensorNoise() if robot.sensor_noise else SensorNoise.off()
-        self.sim = FrankaSim(task.scene_xml, task.object_bodies,
-                             grasp_force_n=robot.grasp_force_n, noise=noise,
-                             torque_reading=robot.torque_reading)
+        hand, grasp_force_n = robot.grasp(task.hand)
+        self.sim = FrankaSim(task.scene_xml, task.object_bodies, grasp_force_n=grasp_force_n,
+                             hand=hand, noise=noise, torque_reading=robot.torque_reading)
         task.bind(self.sim)
         self._params = initial_params(task, object_mass, task_params)
         perturbation = ModelPerturbation(link_mass_scale=1.0 + float(robot.model_mass_error))
@@ -269,7 +269,8 @@ class ImpactEnv(gym.Env):
         self._step_count += 1
         success = bool(self.task.is_success(self.sim))
         self._success_once |= success
-        terminated = bool(success and self.terminate_on_success)
+        terminated = bool(success and self.terminate_on_success
+                          and self.task.success_ends_episode)
         dense = self.reward_type == "dense"
         reward = self.task.dense_reward(self.sim) if dense else float(success)
         return self._observation(), reward, terminated, False, self._info(success, metrics)

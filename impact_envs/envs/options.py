@@ -8,9 +8,13 @@ from dataclasses import dataclass
 from numbers import Integral, Real
 
 from impact_envs.errors import InvalidArgumentError
-from impact_envs.robot.hand import DEFAULT_GRASP_FORCE_N, check_grasp_force
+from impact_envs.robot.hand import HANDS, check_grasp_force, check_hand
 from impact_envs.robot.sim import TORQUE_READINGS as TORQUE_READINGS  # re-exported
 from impact_envs.robot.sim import check_torque_reading
+
+LARGEST_HAND = max(HANDS, key=lambda name: HANDS[name].max_force_n)
+"""The hand with the largest grasp force: ``RobotOptions`` without a hand checks against it
+(the env checks the task's hand)."""
 
 MAX_RENDER_PX = 4096
 """Largest render width or height [px] (the scenes' offscreen buffer is sized to match)."""
@@ -39,7 +43,12 @@ class RobotOptions:
     Attributes:
         sensor_noise: Encoder and joint-torque noise on (docs/sensing.md) or all zero.
         grasp_force_n: Gripper squeeze force when closing on an object [N], above 0 and at
-            most ``MAX_GRASP_FORCE_N`` (140 N, the Franka Hand's quoted peak force).
+            most the hand's largest (``robot/hand.py``: 140 N, the Franka Hand's quoted peak
+            force; 200 N for ``"authors_sim"``). None (default): the hand's default (70 N for
+            the Franka Hand; 200 N for ``"authors_sim"``).
+        hand: Which hand's grasp-force range applies, one of ``hand.HANDS``
+            (``"franka_hand"``, ``"authors_sim"``). None (default): the task's
+            (``Task.hand``: the Franka Hand, except ``IMPACT/HammerBasket-v0``).
         model_mass_error: Relative error of the controller's link masses (0: exact model).
         torque_reading: What the controller reads as the measured joint torque, one of
             ``TORQUE_READINGS`` (docs/sensing.md, "Torque reading"):
@@ -56,17 +65,30 @@ class RobotOptions:
     """
 
     sensor_noise: bool = True
-    grasp_force_n: float = DEFAULT_GRASP_FORCE_N
+    grasp_force_n: float | None = None
     model_mass_error: float = 0.0
     torque_reading: str = "link_side"
+    hand: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.sensor_noise, bool):
             raise InvalidArgumentError(
                 f"invalid sensor_noise {self.sensor_noise!r}; valid: True or False")
-        check_grasp_force(self.grasp_force_n)
+        if self.hand is not None:
+            check_hand(self.hand)
+        if self.grasp_force_n is not None:  # against the task's hand again in the env
+            check_grasp_force(self.grasp_force_n, self.hand or LARGEST_HAND)
         _real("model_mass_error", self.model_mass_error, -0.9, 10.0, "")
         check_torque_reading(self.torque_reading)
+
+    def grasp(self, task_hand: str) -> tuple[str, float]:
+        """``(hand, grasp force [N])`` on a task whose hand is ``task_hand``: this option's
+        hand, else the task's; this option's force, else that hand's default (one-line
+        ``InvalidArgumentError`` if the force exceeds that hand's largest)."""
+        hand = self.hand or task_hand
+        force = HANDS[hand].default_force_n if self.grasp_force_n is None else self.grasp_force_n
+        check_grasp_force(force, hand)
+        return hand, float(force)
 
 
 @dataclass(frozen=True)

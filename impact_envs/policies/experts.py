@@ -23,6 +23,7 @@ _BUILTIN = {
     "dumbbell": "impact_envs.policies.scripted:dumbbell_expert",
     "calligraphy": "impact_envs.policies.scripted_calligraphy:calligraphy_expert",
     "disturbance": "impact_envs.policies.scripted_disturbance:disturbance_expert",
+    "hammer_basket": "impact_envs.policies.scripted_hammer_basket:hammer_basket_expert",
 }
 _REGISTERED: dict[str, ExpertFactory] = {}
 

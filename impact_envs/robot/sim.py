@@ -17,7 +17,7 @@ import numpy as np
 
 from impact_envs.errors import InvalidArgumentError, SimulationError
 from impact_envs.robot.dynamics import ARM_JOINTS, FINGER_JOINTS
-from impact_envs.robot.hand import check_grasp_force
+from impact_envs.robot.hand import check_grasp_force, check_hand
 from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.scene import load_scene
 from impact_envs.robot.sim_kernels import (
@@ -90,7 +90,9 @@ class FrankaSim:
     Args:
         scene_xml: scene file (absolute, or a file name inside ``impact_envs/assets``).
         object_bodies: names of the task's movable bodies (grouped as "object" for contacts).
-        grasp_force_n: gripper squeeze force when closing on an object [N].
+        grasp_force_n: gripper squeeze force when closing on an object [N], at most the
+            hand's largest (``robot/hand.py``).
+        hand: which hand's grasp-force range applies, one of ``hand.HANDS``.
         noise: sensor noise model.
         torque_reading: one of ``TORQUE_READINGS``: the link-side torque sensors
             (``"link_side"``) or the applied torque, noise- and bias-free (``"commanded"``);
@@ -103,6 +105,7 @@ class FrankaSim:
         object_bodies: tuple[str, ...] = (),
         *,
         grasp_force_n: float = 70.0,
+        hand: str = "franka_hand",
         noise: SensorNoise | None = None,
         torque_reading: str = "link_side",
     ) -> None:
@@ -122,6 +125,7 @@ class FrankaSim:
         self.gripper_act = m.actuator("gripper").id
         self.tcp_site = m.site("tcp").id
         self.torque_limits = m.actuator_ctrlrange[self.arm_act, 1].copy()
+        self.hand = check_hand(hand)
         self.set_grasp_force(grasp_force_n)
         self.geom_group = self._classify_geoms(object_bodies)
         self._tau_bias = np.zeros(7)
@@ -197,7 +201,7 @@ class FrankaSim:
 
     def set_grasp_force(self, force_n: float) -> None:
         """Set the gripper squeeze force [N] (the tendon carries each finger at coef 0.5)."""
-        check_grasp_force(force_n)
+        check_grasp_force(force_n, self.hand)
         self.model.actuator_forcerange[self.gripper_act] = (-2.0 * force_n, 2.0 * force_n)
 
     # ----------------------------------------------------------------- state

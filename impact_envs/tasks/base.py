@@ -152,6 +152,13 @@ class Task(ABC):
     env_entry_point: ClassVar[str | None] = None
     """"module:Class" of an ``ImpactEnv`` subclass documenting this task; None registers the
     generic ``ImpactEnv`` with this task."""
+    success_ends_episode: ClassVar[bool] = True
+    """False for a task whose success is judged at the end of the episode only (the env then
+    never terminates it early, whatever ``terminate_on_success`` says): HammerBasket, whose
+    protocol runs every episode for its full 60 s."""
+    hand: ClassVar[str] = "franka_hand"
+    """The hand whose grasp-force range and default apply (``robot/hand.HANDS``) unless
+    ``RobotOptions(hand=...)`` names another."""
     has_tick_hook: ClassVar[bool] = False
     """Declared capability: True when the task overrides ``before_tick`` (the closed loop then
     calls it before every 1 kHz tick). Checked when the subclass is defined."""
