@@ -68,6 +68,8 @@ class PickPlaceSpec:
             (so of the env seed): a teleoperator does not lift to the same height every time,
             and the demos then show carries from a range of heights [m].
         timeouts_steps: per-phase timeouts at 30 Hz.
+        grasp_yaw_obj_rad: the TCP's yaw at the grasp about world z, relative to the object's
+            own x axis [rad] (0: the fingers close across the object's x axis).
         carry_dwell_steps: with > 0, the carry ends only after the target has rested this many
             steps at the carry waypoint above the goal (the carry timeout grows by as much):
             the object is held still aloft, e.g. to watch the internal model adapt
@@ -90,6 +92,7 @@ class PickPlaceSpec:
     carry_jitter_m: float = 0.15
     timeouts_steps: tuple[int, ...] = (90, 60, 18, 450, 150, 120, 15, 10_000)
     carry_dwell_steps: int = 0
+    grasp_yaw_obj_rad: float = 0.0
 
     def timeout_steps(self, phase: int) -> int:
         """Timeout of ``phase`` [policy steps] (the carry's includes the dwell)."""
@@ -173,7 +176,10 @@ class PickPlaceExpert:
         if phase <= GRASP:
             g = self._grasp_point(o) if phase < GRASP else self.target[i]
             z = {APPROACH: s.hover_z, DESCEND: s.grasp_z, GRASP: s.grasp_z}[phase]
-            return np.array([g[0], g[1], z]), _yaw_frame(obj_rot[:, 0])
+            c, si = np.cos(s.grasp_yaw_obj_rad), np.sin(s.grasp_yaw_obj_rad)
+            axis = np.array([c * obj_rot[0, 0] - si * obj_rot[1, 0],
+                             si * obj_rot[0, 0] + c * obj_rot[1, 0], 0.0])
+            return np.array([g[0], g[1], z]), _yaw_frame(axis)
         goal_rot = _yaw_frame(np.array([1.0, 0.0, 0.0]))
         sign = 1.0 if obj_rot[0, 0] >= 0.0 else -1.0
         goal_xy = o["goal_pos"][:2] + np.array([sign * s.place_offset_goal, 0.0])

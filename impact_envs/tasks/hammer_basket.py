@@ -38,6 +38,9 @@ SUCCESS_HALF_M = 0.1875
 GRASP_OFFSET_FROM_COM_M = (-0.0439, -0.0082, -0.0015)
 """The body origin (their grasp point) relative to the centre of mass, hammer frame [m]
 (the scene's ``<inertial pos>``, negated)."""
+HANDLE_YAW_RAD = -0.1204
+"""The handle's yaw in the hammer frame [rad] (-6.9 deg: their mesh's handle centreline runs
+from y = 0.034 m at its end to 0.011 m at the head; the scene's handle box)."""
 HOME_Q = np.array([0.0, -np.pi / 4, 0.0, -3 * np.pi / 4, 0.0, np.pi / 2, np.pi / 4])
 """Their home posture [rad] (the scene keyframe), without noise, as their reset does."""
 

@@ -117,11 +117,30 @@ def test_grasp_forces_within_the_hand_limit(force: float) -> None:
     assert RobotOptions(grasp_force_n=force).grasp_force_n == force
 
 
-@pytest.mark.parametrize("force", [0.0, 0, MAX_GRASP_FORCE_N + 1e-6, 150, 200.0, 1000.0,
-                                   -1.0, float("nan"), float("inf"), True, "70", None])
-def test_grasp_forces_outside_are_one_line_at_construction(force: object) -> None:
-    with pytest.raises(InvalidArgumentError, match=r"^invalid grasp_force_n .*at most 140 N"):
+@pytest.mark.parametrize("force", [0.0, 0, 200.0 + 1e-6, 1000.0, -1.0, float("nan"),
+                                   float("inf"), True, "70"])
+def test_grasp_forces_outside_every_hand_are_one_line_at_construction(force: object) -> None:
+    """Without a hand, the options check against the largest hand (the authors' 200 N)."""
+    with pytest.raises(InvalidArgumentError, match=r"^invalid grasp_force_n .*at most 200 N"):
         RobotOptions(grasp_force_n=force)
+
+
+@pytest.mark.parametrize("force", [MAX_GRASP_FORCE_N + 1e-6, 150, 200.0])
+def test_grasp_forces_above_the_franka_hand_are_one_line(force: float) -> None:
+    """Naming the Franka Hand refuses at construction; leaving the hand to the task refuses
+    when a Franka Hand task is built (every task but HammerBasket)."""
+    with pytest.raises(InvalidArgumentError, match=r"^invalid grasp_force_n .*at most 140 N"):
+        RobotOptions(grasp_force_n=force, hand="franka_hand")
+    with pytest.raises(InvalidArgumentError, match=r"^invalid grasp_force_n .*at most 140 N"):
+        gym.make("IMPACT/Hammer-v0", robot=RobotOptions(grasp_force_n=force))
+
+
+def test_no_grasp_force_means_the_hands_default() -> None:
+    assert RobotOptions().grasp("franka_hand") == ("franka_hand", 70.0)
+    assert RobotOptions().grasp("authors_sim") == ("authors_sim", 200.0)
+    assert RobotOptions(hand="franka_hand").grasp("authors_sim") == ("franka_hand", 70.0)
+    with pytest.raises(InvalidArgumentError, match=r"^invalid hand 'paw'.*franka_hand"):
+        RobotOptions(hand="paw")
 
 
 @pytest.mark.parametrize("force", [0.0, 141.0, 200.0])

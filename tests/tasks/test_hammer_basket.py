@@ -31,13 +31,16 @@ def env():
 
 
 def _geom_aabb(m: mujoco.MjModel, d: mujoco.MjData, names: tuple[str, ...]) -> np.ndarray:
-    """World axis-aligned box (2, 3) around the named box geoms."""
+    """Axis-aligned box (2, 3) around the named box geoms, in the hammer body's frame (the
+    spawn turns the hammer about z)."""
+    body = m.body("hammer").id
+    b_pos, b_rot = d.xpos[body], d.xmat[body].reshape(3, 3)
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
     for name in names:
         g = m.geom(name).id
         rot, half = d.geom_xmat[g].reshape(3, 3), m.geom_size[g]
         corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-        pts = d.geom_xpos[g] + (corners * half) @ rot.T
+        pts = (d.geom_xpos[g] + (corners * half) @ rot.T - b_pos) @ b_rot
         lo, hi = np.minimum(lo, pts.min(0)), np.maximum(hi, pts.max(0))
     return np.array([lo, hi])
 
