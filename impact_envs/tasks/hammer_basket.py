@@ -41,6 +41,9 @@ GRASP_OFFSET_FROM_COM_M = (-0.0439, -0.0082, -0.0015)
 HANDLE_YAW_RAD = -0.1204
 """The handle's yaw in the hammer frame [rad] (-6.9 deg: their mesh's handle centreline runs
 from y = 0.034 m at its end to 0.011 m at the head; the scene's handle box)."""
+HANDLE_Y_AT_ORIGIN_M = 0.015
+"""Where the handle's centreline crosses the body origin's x, hammer frame y [m] (their mesh:
+at x = 0 the handle spans y 0.004-0.025 m; the scene's handle box: 0.0015-0.0285 m)."""
 HOME_Q = np.array([0.0, -np.pi / 4, 0.0, -3 * np.pi / 4, 0.0, np.pi / 2, np.pi / 4])
 """Their home posture [rad] (the scene keyframe), without noise, as their reset does."""
 

@@ -1,11 +1,12 @@
-"""The HammerBasket expert's grasp yaw: the authors' (home orientation, 6.9 deg off square to
-the handle) against ours (turned with the handle), as success counts.
+"""The HammerBasket expert's grasp: the authors' (home orientation, 6.9 deg off square to the
+handle, fingers around the body origin) against ours, as success counts.
 
 Run ``python -m impact_eval.experiments.hammer_basket_grasp``. Their demonstrator under
-impedance with the privileged ``m g / K`` offset, on ``IMPACT/HammerBasket-v0``, both yaws on
-the same seeds and masses; each episode runs ``--steps`` policy steps (700: the expert has
+impedance with the privileged ``m g / K`` offset, on ``IMPACT/HammerBasket-v0``: their grasp,
+turned square to the handle, and turned and centred on the handle (shipped), on the same
+seeds and masses; each episode runs ``--steps`` policy steps (700: the expert has
 released the hammer and retreated by step ~650) and is scored by the task's own test.
-Prints one line per yaw and writes nothing.
+Prints one line per grasp and writes nothing.
 """
 
 from __future__ import annotations
@@ -18,14 +19,20 @@ import numpy as np
 import impact_envs  # noqa: F401 - registers the envs
 from impact_envs.policies.interface import stack_obs
 from impact_envs.policies.scripted_hammer_basket import hammer_basket_expert
-from impact_envs.tasks.hammer_basket import HANDLE_YAW_RAD
+from impact_envs.tasks.hammer_basket import HANDLE_Y_AT_ORIGIN_M, HANDLE_YAW_RAD
 
-YAWS = {"authors (home orientation)": 0.0, "ours (along the handle)": HANDLE_YAW_RAD}
+GRASPS = {"theirs (home orientation, body origin)": (0.0, 0.0),
+          "square to the handle, body origin": (HANDLE_YAW_RAD, 0.0),
+          "square to the handle, its centreline (shipped)": (HANDLE_YAW_RAD,
+                                                             HANDLE_Y_AT_ORIGIN_M)}
+"""Label -> (grasp yaw [rad], grasp point's y [m]), hammer frame."""
 
 
-def run_one(env: gym.Env, yaw: float, mass: float, seed: int, steps: int) -> bool:
-    """One episode's success under the expert with grasp yaw ``yaw`` [rad]."""
-    expert = hammer_basket_expert("privileged", grasp_yaw_obj_rad=yaw)
+def run_one(env: gym.Env, grasp: tuple[float, float], mass: float, seed: int,
+            steps: int) -> bool:
+    """One episode's success under the expert with ``grasp`` (yaw, y)."""
+    expert = hammer_basket_expert("privileged", grasp_yaw_obj_rad=grasp[0],
+                                  grasp_y_obj_m=grasp[1])
     obs, _ = env.reset(seed=seed, options={"object_mass": mass})
     expert.reset(1, object_mass_kg=np.array([mass]))
     info: dict = {}
@@ -43,8 +50,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.steps < 1:
         parser.error(f"--steps {args.steps}: valid: >= 1")
     env = gym.make("IMPACT/HammerBasket-v0", controller="impedance")
-    for label, yaw in YAWS.items():
-        wins = [run_one(env, yaw, m, s, args.steps) for m in args.masses for s in args.seeds]
+    for label, grasp in GRASPS.items():
+        wins = [run_one(env, grasp, m, s, args.steps) for m in args.masses for s in args.seeds]
         print(f"{label}: {sum(wins)}/{len(wins)} (masses {args.masses} kg, seeds "
               f"{args.seeds[0]}..{args.seeds[-1]}, {args.steps} steps)", flush=True)
     env.close()
