@@ -16,6 +16,7 @@ from impact_envs.envs.options import ObservationOptions
 from impact_envs.errors import CheckpointError
 from impact_envs.policies.diffusion.compat import check_policy_env
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
+from impact_eval.methods import env_short_name
 
 ROOT = Path(impact_envs.__file__).parent / "checkpoints"
 SHIPPED = sorted(p.parent for p in ROOT.glob("*/*/model.safetensors"))
@@ -25,8 +26,9 @@ SHIPPED = sorted(p.parent for p in ROOT.glob("*/*/model.safetensors"))
 def test_shipped_checkpoints_fit_their_env(path: Path) -> None:
     """Each shipped checkpoint fits its env made as its demos were recorded (a visuomotor one
     with the store's cameras); a visuomotor checkpoint on a state env is one line."""
-    env_id = f"IMPACT/{path.parent.name.capitalize()}-v0"
     policy = DiffusionPolicy.load(path)
+    env_id = policy.meta["dataset"]["attrs"]["env_id"]  # the env its demos were recorded on
+    assert env_short_name(env_id) == path.parent.name  # the folder impact-eval looks in
     recorded = policy.meta["dataset"]["attrs"].get("observation")
     kwargs = {}
     if recorded is not None:
