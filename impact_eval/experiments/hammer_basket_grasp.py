@@ -19,7 +19,11 @@ import numpy as np
 import impact_envs  # noqa: F401 - registers the envs
 from impact_envs.policies.interface import stack_obs
 from impact_envs.policies.scripted_hammer_basket import hammer_basket_expert
-from impact_envs.tasks.hammer_basket import HANDLE_Y_AT_ORIGIN_M, HANDLE_YAW_RAD
+from impact_envs.tasks.hammer_basket import (
+    HANDLE_Y_AT_ORIGIN_M,
+    HANDLE_YAW_RAD,
+    HammerBasketTask,
+)
 
 GRASPS = {"theirs (home orientation, body origin)": (0.0, 0.0),
           "square to the handle, body origin": (HANDLE_YAW_RAD, 0.0),
@@ -49,6 +53,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.steps < 1:
         parser.error(f"--steps {args.steps}: valid: >= 1")
+    low, high = HammerBasketTask.params[0].low, HammerBasketTask.params[0].high
+    if any(not low <= m <= high for m in args.masses):
+        parser.error(f"--masses {args.masses}: valid: {low:g} to {high:g} kg")
     env = gym.make("IMPACT/HammerBasket-v0", controller="impedance")
     for label, grasp in GRASPS.items():
         wins = [run_one(env, grasp, m, s, args.steps) for m in args.masses for s in args.seeds]
