@@ -11,6 +11,7 @@ import socket
 import subprocess
 import time
 from pathlib import Path
+from unittest import mock
 
 import pytest
 
@@ -27,6 +28,34 @@ PC. The robot's 0.8 ms default is measured by
 10 ms is the largest ``--budget-ms`` accepts and still stops a loop that has hung."""
 SIM_BUDGET = ["--budget-ms", f"{SIM_BUDGET_MS:g}"]
 """``SIM_BUDGET_MS`` as ``impact-robot`` arguments."""
+
+
+FORCE_AFTER_S = 5.0
+"""When the scene's force arrives [s on the robot's clock after the torque loop starts]."""
+
+
+def franky_scene_with_force(*options: str, flag: Path):
+    """franky-sim with a force (``options``: ``--load-kg`` / ``--push-n``) that arrives
+    ``FORCE_AFTER_S`` into the torque loop: ``flag_at_loop_start(flag)`` starts the count."""
+    return franky_scene(*options, "--flag", str(flag), "--after-s", f"{FORCE_AFTER_S:g}")
+
+
+@contextlib.contextmanager
+def flag_at_loop_start(flag: Path):
+    """Create ``flag`` as ``impact_franka``'s torque loop starts (the robot has accepted torque
+    control), so the scene server's ``--after-s`` counts from there on the simulated clock,
+    not from a wall-clock timer that a loaded host's slow imports would shift."""
+    from impact_franka import runner
+
+    original = runner._start_torque_control
+
+    def start(robot: object, plf: object) -> object:
+        active = original(robot, plf)
+        flag.touch()
+        return active
+
+    with mock.patch.object(runner, "_start_torque_control", start):
+        yield
 
 
 def simulator_python(variable: str = "IMPACT_FRANKY_SIM_PYTHON") -> str:

@@ -2,13 +2,17 @@
 
 Run with franky-sim's own python (a virtualenv of its own, ``IMPACT_FRANKY_SIM_PYTHON``):
 
-    python franky_scene_server.py [--load-kg M] [--push-n FX,FY,FZ] [--flag FILE]
+    python franky_scene_server.py [--load-kg M] [--push-n FX,FY,FZ] [--flag FILE [--after-s T]]
                                   [--object-kg M --object-log FILE]
 
-- ``--load-kg`` / ``--push-n``: once ``FLAG`` exists (immediately without ``--flag``), a
-  force acts on the hand's centre of mass before every physics step: the weight of an
+- ``--load-kg`` / ``--push-n``: once ``FLAG`` exists (immediately without ``--flag``) and
+  ``T`` s of simulated time (1 ms per physics step) have passed since the server first saw
+  it, a force acts on the hand's centre of mass before every physics step: the weight of an
   undeclared ``M`` kg load (franky-sim's gravity compensation knows only the hand) plus a
-  constant push [N, world]. The test creates the file while the controller holds the pose.
+  constant push [N, world]. The tests create the file as the torque loop starts, so the force
+  arrives ``T`` s into the hold on the robot's clock, however long the client's imports and
+  warm-up took (a wall-clock timer made the onset, and with it the result, depend on the
+  host's load).
 - ``--no-joint-friction``: the arm's joints without their Coulomb friction (franky-sim's FR3
   model has MuJoCo Menagerie's identified ``frictionloss``, 0.25-1.14 Nm; its ``tau_J`` is the
   applied torque, so static friction enters the estimate, as it does not on a real FR3's
@@ -61,12 +65,13 @@ def main() -> None:
     parser.add_argument("--load-kg", type=float, default=0.0)
     parser.add_argument("--push-n", type=_vector, default=[0.0, 0.0, 0.0])
     parser.add_argument("--flag", default=None)
+    parser.add_argument("--after-s", type=float, default=0.0)
     parser.add_argument("--object-kg", type=float, default=None)
     parser.add_argument("--object-log", default=None)
     parser.add_argument("--no-joint-friction", action="store_true")
     args = parser.parse_args()
     force = [args.push_n[0], args.push_n[1], args.push_n[2] - 9.81 * args.load_kg]
-    state = {"on": args.flag is None, "steps": 0}
+    state = {"on": args.flag is None, "steps": 0, "flag_steps": 0}
     with MujocoSimulator() as sim:
         sim.add_robot()
         if args.object_kg is not None:
@@ -79,7 +84,9 @@ def main() -> None:
                     s.model.dof_frictionloss[joint.dofadr[0]] = 0.0
                 state["frictionless"] = True
             if not state["on"]:
-                state["on"] = os.path.exists(args.flag)
+                if state["flag_steps"] or os.path.exists(args.flag):
+                    state["flag_steps"] += 1  # physics steps (1 ms each) since the flag
+                state["on"] = state["flag_steps"] > 1000.0 * args.after_s
                 if not state["on"]:
                     return
             hand = mujoco.mj_name2id(s.model, mujoco.mjtObj.mjOBJ_BODY, "robot0_hand")

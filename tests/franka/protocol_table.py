@@ -14,11 +14,10 @@ import argparse
 import contextlib
 import io
 import tempfile
-import threading
 from pathlib import Path
 
 import pandas as pd
-from franka_servers import franky_scene
+from franka_servers import SIM_BUDGET, flag_at_loop_start, franky_scene_with_force
 
 from impact_franka.cli import main as impact_robot
 
@@ -30,14 +29,11 @@ SECONDS = 12.0
 
 def _run(out: Path, options: list[str], controller: str) -> pd.DataFrame:
     flag = out / "on"
-    with franky_scene(*options, "--flag", str(flag)) as host:
-        timer = threading.Timer(6.0, flag.touch)
-        timer.start()
-        with contextlib.redirect_stdout(io.StringIO()):
-            status = impact_robot(["hold", "--host", host, "--seconds", str(SECONDS),
-                                   "--controller", controller, "--max-payload-kg", "3",
-                                   "--out", str(out)])
-        timer.cancel()
+    with (franky_scene_with_force(*options, flag=flag) as host, flag_at_loop_start(flag),
+          contextlib.redirect_stdout(io.StringIO())):
+        status = impact_robot(["hold", *SIM_BUDGET, "--host", host, "--seconds", str(SECONDS),
+                               "--controller", controller, "--max-payload-kg", "3",
+                               "--out", str(out)])
     assert status == 0, f"impact-robot hold exited {status}"
     ticks = pd.read_csv(out / "ticks.csv")
     return ticks[ticks["t_s"] <= SECONDS].reset_index(drop=True)

@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -15,7 +14,16 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 import pytest
-from franka_servers import HERE, SIM_BUDGET, franky_scene, serving, simulator_python
+from franka_servers import (
+    FORCE_AFTER_S,
+    HERE,
+    SIM_BUDGET,
+    flag_at_loop_start,
+    franky_scene,
+    franky_scene_with_force,
+    serving,
+    simulator_python,
+)
 
 from impact_envs.errors import InvalidArgumentError
 from impact_franka.gripper import GripperCommand, GripperReply
@@ -26,21 +34,16 @@ DOWN = np.array([0.0, 1.0, 0.0, 0.0])  # TCP pointing down (w-first)
 
 def _hold_with_flag(tmp_path: Path, options: list[str], seconds: float,
                     controller: str = "impact") -> pd.DataFrame:
-    """``hold`` in franky-sim; the scene's force switches on 6 s after the command starts
-    (after the imports and the warm-up: inside the hold). The hold's ticks."""
+    """``hold`` in franky-sim; the scene's force arrives ``FORCE_AFTER_S`` into the torque
+    loop on the robot's clock (inside the hold, whatever the host's load). The hold's ticks."""
     from impact_franka.cli import main
 
     flag = tmp_path / "on"
-    with franky_scene(*options, "--flag", str(flag)) as host:
-        timer = threading.Timer(6.0, flag.touch)
-        timer.start()
-        try:
-            assert main(["hold", *SIM_BUDGET,
-                         "--host", host, "--seconds", str(seconds), "--controller",
-                         controller, "--max-payload-kg", "3", "--out",
-                         str(tmp_path / "run")]) == 0
-        finally:
-            timer.cancel()
+    with franky_scene_with_force(*options, flag=flag) as host, flag_at_loop_start(flag):
+        assert main(["hold", *SIM_BUDGET,
+                     "--host", host, "--seconds", str(seconds), "--controller",
+                     controller, "--max-payload-kg", "3", "--out",
+                     str(tmp_path / "run")]) == 0
     ticks = pd.read_csv(tmp_path / "run" / "ticks.csv")
     return ticks[ticks["t_s"] <= seconds].reset_index(drop=True)
 
@@ -64,11 +67,12 @@ def test_an_undeclared_payload_handed_over_during_a_hold_is_learned(tmp_path) ->
     +14 % weight; docs/franka.md)."""
     ticks = _hold_with_flag(tmp_path, ["--load-kg", "3", "--no-joint-friction"], 12.0)
     t_on = _onset(ticks, "wrench_ext_z_n", 10.0)
-    assert t_on > 0.5 and ticks["pos_error_m"].max() > 0.03  # it arrived, pulled the hand
+    assert t_on == pytest.approx(FORCE_AFTER_S, abs=0.2)  # on the robot's clock
+    assert ticks["pos_error_m"].max() > 0.03  # it arrived, pulled the hand
     later = ticks[ticks["t_s"] >= t_on + 1.5]
-    assert later["pos_error_m"].max() <= 3e-3  # taken up within 1.5 s (measured 1.8 mm)
+    assert later["pos_error_m"].max() <= 3e-3  # taken up within 1.5 s (measured 2.0 mm)
     learned = ticks["wrench_pred_z_n"].iloc[-1] - _at(ticks, t_on - 0.2)["wrench_pred_z_n"]
-    assert learned == pytest.approx(3.0 * 9.81, rel=0.05)  # measured 29.40 N for 29.43 N
+    assert learned == pytest.approx(3.0 * 9.81, rel=0.05)  # measured 29.41 N for 29.43 N
 
 
 def test_a_push_is_taken_up(tmp_path) -> None:
