@@ -104,7 +104,7 @@ resolution docs/sensing.md uses for the FR3's link-side encoders (no published F
 
 PROFILES: dict[str, Realism] = {
     "ideal": Realism(),
-    "fr3": Realism(tau_offset_std_nm=0.3, tau_offset_drift_nm_per_sqrt_s=0.01,
+    "fr3": Realism(tau_offset_std_nm=0.2, tau_offset_drift_nm_per_sqrt_s=0.01,
                    model_link_mass_std=0.05, model_com_std_m=0.005, model_inertia_std=0.10,
                    delay_ticks=1, command_loss_rate=0.0, encoder_step_rad=ENCODER_STEP_FR3_RAD),
 }
