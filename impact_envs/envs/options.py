@@ -4,7 +4,8 @@ observations."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, fields, replace
 from numbers import Integral, Real
 
 from impact_envs.errors import InvalidArgumentError
@@ -195,3 +196,40 @@ class ObservationOptions:
     def uses_images(self) -> bool:
         """Whether the observation holds camera images (every mode but ``"state"``)."""
         return self.obs_mode != "state"
+
+
+def apply_robot_overrides(robot: RobotOptions | None, overrides: Sequence[str]) -> RobotOptions:
+    """``robot`` (default ``RobotOptions()``) with ``FIELD=VALUE`` overrides on top, e.g.
+    ``("realism=fr3", "delay_ticks=0")`` (``impact-eval --robot-set``); a value is read as the
+    field's type (``true``/``false`` for booleans, ``none`` for an optional field's None).
+    One-line ``InvalidArgumentError`` naming the valid fields or values."""
+    base = robot if robot is not None else RobotOptions()
+    names = [f.name for f in fields(RobotOptions)]
+    changes: dict[str, object] = {}
+    for item in overrides:
+        name, sep, text = str(item).partition("=")
+        name = name.strip()
+        if not sep or name not in names:
+            raise InvalidArgumentError(
+                f"invalid --robot-set {item!r}; valid: FIELD=VALUE with FIELD one of "
+                f"{', '.join(names)}")
+        changes[name] = _parse_field(name, text.strip(), getattr(RobotOptions(), name))
+    return replace(base, **changes)
+
+
+def _parse_field(name: str, text: str, default: object) -> object:
+    """``text`` as ``RobotOptions.name``'s value (its default's type; None-able fields)."""
+    low = text.lower()
+    if low == "none" and name != "realism":
+        return None
+    if isinstance(default, bool):
+        if low in ("true", "false"):
+            return low == "true"
+        raise InvalidArgumentError(f"invalid --robot-set {name}={text!r}; valid: true or false")
+    if isinstance(default, str) or name in ("hand", "realism", "torque_reading"):
+        return text
+    try:
+        return int(text) if name in ("model_seed", "delay_ticks") else float(text)
+    except ValueError:
+        raise InvalidArgumentError(
+            f"invalid --robot-set {name}={text!r}; valid: a number") from None
