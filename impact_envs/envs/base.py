@@ -33,14 +33,11 @@ from impact_envs.envs.carry import ControllerCarry, apply_carry, check_carry, co
 from impact_envs.envs.observation_space import state_space
 from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.envs.pixels import PixelObservations, check_view
+from impact_envs.envs.robot_parts import build_robot
 from impact_envs.envs.state import EnvState, capture, restore
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import ClosedLoop, TickTargets
 from impact_envs.rates import CONTROL_HZ, POLICY_HZ
-from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
-from impact_envs.robot.noise import SensorNoise
-from impact_envs.robot.realism import Realism
-from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import Task, refresh_constants
 
 
@@ -86,28 +83,18 @@ class ImpactEnv(gym.Env):
         self.terminate_on_success = bool(terminate_on_success)
         self.persist_internal_model = bool(persist_internal_model)
         self.task = task = self.make_task() if task is None else load_task(task)
-        self.realism = realism = robot.resolved_realism()
+        self.sim, self.dynamics, self.realism = build_robot(robot, task.scene_xml,
+                                                            task.object_bodies, task.hand)
         self.robot_profile = robot.realism
         """The robot profile's name (``info["robot_profile"]``; ``RobotOptions.realism``)."""
-        noise = realism_noise(robot.sensor_noise, realism)
-        hand, grasp_force_n = robot.grasp(task.hand)
-        drift = realism.tau_offset_drift_nm_per_sqrt_s if robot.sensor_noise else 0.0
-        self.sim = FrankaSim(task.scene_xml, task.object_bodies, grasp_force_n=grasp_force_n,
-                             hand=hand, noise=noise, torque_reading=robot.torque_reading,
-                             delay_ticks=realism.delay_ticks, offset_drift_nm_per_sqrt_s=drift)
         task.bind(self.sim)
         self._params = initial_params(task, object_mass, task_params)
-        perturbation = ModelPerturbation(
-            link_mass_scale=1.0 + float(robot.model_mass_error),
-            link_mass_noise=realism.model_link_mass_std, com_noise_m=realism.model_com_std_m,
-            inertia_noise=realism.model_inertia_std, seed=realism.model_seed)
-        self.dynamics = PinocchioArm(perturbation=perturbation)
         cfg, self.controller_preset = controller_config(controller_preset)
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
         self.controller = ImpactController(self.dynamics, cfg, mode=controller)
         self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
                                task.before_tick if task.has_tick_hook else None,
-                               command_loss_rate=realism.command_loss_rate)
+                               command_loss_rate=self.realism.command_loss_rate)
         self._warm: ModelSnapshot | None = None
         self._carry: ControllerCarry | None = None
         self._camera, self._size = render.camera, (int(render.height), int(render.width))
@@ -375,15 +362,6 @@ class ImpactEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
-
-
-def realism_noise(sensor_noise: bool, realism: Realism) -> SensorNoise:
-    """The sensors' noise under ``realism``: ``SensorNoise``'s white noise with the profile's
-    torque offsets and encoder steps; all off without ``sensor_noise``."""
-    if not sensor_noise:
-        return SensorNoise.off()
-    return SensorNoise(tau_bias_std_nm=realism.tau_offset_std_nm,
-                       q_step_rad=realism.encoder_step_rad)
 
 
 DEFAULT_ROBOT_PROFILE = "ideal"
