@@ -192,19 +192,39 @@ def test_check_floats_the_arm_and_reports_the_loop(franky_sim, capsys) -> None:
     assert "collision thresholds for an undeclared 3 kg" in out
 
 
+def settled_state(robot, still_rad_s: float = 1e-6, timeout_s: float = 60.0):
+    """The robot's state once its joints are still (max |dq| below ``still_rad_s``): franky-sim
+    holds the arm with a stiff joint PD from the moment it serves, and the arm sags about 30
+    urad over its first ~3 s, during which tau_J changes by ~0.13 Nm."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        state = robot.read_once()
+        if max(abs(v) for v in state.dq) < still_rad_s:
+            return state
+        if time.monotonic() > deadline:
+            pytest.fail(f"franky-sim's arm still moves after {timeout_s} s: dq={state.dq}")
+        time.sleep(0.2)
+
+
 def test_our_model_agrees_with_franka_s(franky_sim) -> None:
     """Franka's Model (libfranka builds it from the URDF the server sends) against ours at the
-    simulator's start pose: the TCP Jacobians agree; both gravity torques explain the measured
-    tau_J at rest to within 0.2 Nm (ours models the hand's inertia a little differently)."""
+    simulator's start pose, read once the arm is still: the TCP Jacobians agree; the gravity
+    torques agree to 0.2 Nm; each explains the measured tau_J to within 0.25 Nm.
+
+    franky-sim's tau_J is its hold torque: gravity from the URDF plus a PD term that makes up
+    the difference to its MuJoCo model's gravity. Settled, that is 0.142 Nm from Franka's model
+    and 0.186 Nm from ours (joint 2; ours models the hand's inertia a little differently).
+    Read in the first ~2 s after the server starts, it is smaller (0.02-0.08 Nm): the test read
+    it then until a loaded CI machine read it later (0.109 Nm)."""
     import pylibfranka as plf
 
     from impact_envs.robot.dynamics import PinocchioArm
     from impact_franka.model import compare_models
 
     robot = plf.Robot(franky_sim, plf.RealtimeConfig.kIgnore)
-    agreement = compare_models(robot.load_model(), robot.read_once(), PinocchioArm())
+    agreement = compare_models(robot.load_model(), settled_state(robot), PinocchioArm())
     assert agreement.jacobian < 1e-6
-    assert agreement.franka_vs_tau_j_nm < 0.05 and agreement.ours_vs_tau_j_nm < 0.2
+    assert agreement.franka_vs_tau_j_nm < 0.2 and agreement.ours_vs_tau_j_nm < 0.25
     assert agreement.gravity_nm < 0.2 and agreement.mismatches() == []
 
 
