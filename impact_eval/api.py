@@ -151,6 +151,16 @@ def _raise_if_all_crashed(out: Path) -> None:
             f"{' ...' if len(crashed) > 3 else ''} (rows in {out / 'episodes.csv'})")
 
 
+def _check_robot_set(robot_set: object) -> tuple[str, ...]:
+    """``robot_set`` as a tuple of ``FIELD=VALUE`` strings (one line if it is not a list of
+    strings; the fields are checked by ``prepare``)."""
+    if isinstance(robot_set, str) or not all(isinstance(s, str) for s in robot_set):  # type: ignore[union-attr]
+        raise InvalidArgumentError(
+            f"invalid robot_set {robot_set!r}; valid: a list of 'FIELD=VALUE' strings, e.g. "
+            "['realism=fr3']")
+    return tuple(robot_set)  # type: ignore[arg-type]
+
+
 def evaluate(
     policy: PolicySource,
     env_id: str,
@@ -166,6 +176,7 @@ def evaluate(
     envs_per_worker: int = 4,
     resume: bool = False,
     observation: ObservationOptions | dict | str | None = None,
+    robot_set: Sequence[str] = (),
 ) -> pd.DataFrame:
     """Evaluate ``policy`` on ``env_id`` over ``values`` of the env's sweep parameter.
 
@@ -191,6 +202,8 @@ def evaluate(
             an ``obs_mode`` string; default the state). A policy that says what it needs (a
             diffusion-policy checkpoint, a scripted expert) is checked against it before
             anything is written: a camera checkpoint needs e.g. ``"rgb"``.
+        robot_set: ``FIELD=VALUE`` changes of the simulated robot (``RobotOptions``), as
+            ``impact-eval --robot-set``, e.g. ``["realism=fr3"]``.
 
     Returns:
         The episodes table (one row per episode, the columns of ``episodes.csv``).
@@ -215,6 +228,7 @@ def evaluate(
         episodes=_check_int("episodes", episodes, 1), out=Path(out), workers=1,
         envs_per_worker=_check_int("envs_per_worker", envs_per_worker, 1),
         seed=_check_int("seed", seed, 0), resume=bool(resume),
+        robot_overrides=_check_robot_set(robot_set),
     )
     options = coerce_options("observation", observation, ObservationOptions)
     spec = MethodSpec(name, controller, build, "evaluate() policy object",

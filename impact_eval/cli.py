@@ -129,6 +129,15 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         "internal_model.slow_rate_max=1.5; recorded in run.json",
     )
     p.add_argument(
+        "--robot-set",
+        action="append",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="change one field of the simulated robot (RobotOptions) for every method "
+        "(repeatable), e.g. realism=fr3 (docs/sensing.md, 'Realism profiles') or "
+        "delay_ticks=0; recorded in run.json and checked on --resume",
+    )
+    p.add_argument(
         "--resume",
         action="store_true",
         help="continue OUT with the same methods, grid and episodes: skip (method, value, "
@@ -263,6 +272,7 @@ def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
         extend=a.extend,
         video_episodes=a.video,
         controller_overrides=tuple(a.controller_set),
+        robot_overrides=tuple(a.robot_set),
         beyond_hardware_limits=a.beyond_hardware_limits,
         executor=a.executor,
         ray_address=a.ray_address,

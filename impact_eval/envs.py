@@ -54,7 +54,8 @@ def check_env_id(env_id: str) -> str:
 
 def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
              preset: str = "default", render: bool = False,
-             observation: object | None = None, robot: object | None = None) -> gym.Env:
+             observation: object | None = None, robot: object | None = None,
+             robot_overrides: Sequence[str] = ()) -> gym.Env:
     """``gym.make(env_id, controller=controller, controller_preset=preset)``, errors turned
     into ``ImpactError``; ``observation`` and ``robot`` (an ``ObservationOptions``, a
     ``RobotOptions``) are passed when given.
@@ -62,7 +63,9 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
     IMPACT envs end an episode at success (``terminate_on_success=True``): success is then
     final, and a sweep does not spend the remaining steps of solved episodes. ``overrides``
     (``SECTION.FIELD=VALUE``, ``control.overrides``) change the controller's config from the
-    preset's values, for ablations. Envs outside the IMPACT namespace (plugins) get the preset
+    preset's values, for ablations; ``robot_overrides`` (``FIELD=VALUE``,
+    ``RobotOptions`` fields, e.g. ``realism=fr3``) change the robot on top of ``robot``.
+    Envs outside the IMPACT namespace (plugins) get the preset
     argument only when it is not ``"default"``, so a plugin env that cannot take it fails in one
     line instead of silently running another configuration.
     """
@@ -74,6 +77,10 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
         extra["controller_preset"] = preset
     if observation is not None:
         extra["observation"] = observation  # an ObservationOptions (camera methods)
+    if robot_overrides:
+        from impact_envs.envs.options import apply_robot_overrides
+
+        robot = apply_robot_overrides(robot, robot_overrides)  # type: ignore[arg-type]
     if robot is not None:
         extra["robot"] = robot  # a RobotOptions (the *_authors methods' torque reading)
     if overrides:
@@ -189,12 +196,12 @@ def precompile_kernels(env: gym.Env) -> None:
 
 
 def method_env(env_id: str, spec: object, overrides: Sequence[str] = (),
-               render: bool = False) -> gym.Env:
+               render: bool = False, robot_overrides: Sequence[str] = ()) -> gym.Env:
     """``make_env`` for a method: its controller, preset, observation and robot, wrapped in
     ``impact_envs.wrappers.RLActions`` when the method acts in one of its modes (an SB3 model
     trained on the wrapper)."""
     env = make_env(env_id, spec.controller, overrides, spec.preset, render, spec.observation,
-                   getattr(spec, "robot", None))
+                   getattr(spec, "robot", None), robot_overrides)
     if spec.action_mode is None:
         return env
     from impact_envs.wrappers import RLActions

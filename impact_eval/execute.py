@@ -38,6 +38,7 @@ def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict
             "bin_highs": list(cfg.bin_highs),
             "methods": list(cfg.methods),
             "controller_overrides": list(cfg.controller_overrides),
+            "robot_overrides": list(cfg.robot_overrides),
             "method_controllers": plan.identity.method_controllers,
         },
         "env": {

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from impact_envs.control.config import ControllerConfig, beyond_hardware_limits
 from impact_envs.control.overrides import apply_overrides
+from impact_envs.envs.options import apply_robot_overrides
 from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.parallel import check_executor
 from impact_eval import csvio, runinfo
@@ -48,6 +49,8 @@ class SweepRequest:
     seed: int
     resume: bool
     controller_overrides: tuple[str, ...] = ()
+    robot_overrides: tuple[str, ...] = ()
+    """``--robot-set FIELD=VALUE``: ``RobotOptions`` fields on every method's robot."""
     extend: bool = False
     """``--extend``: resume, and let methods and grid values grow (``check_resumable``)."""
     video_episodes: int = 0
@@ -157,7 +160,8 @@ def _inspect_env(req: SweepRequest, specs: list[MethodSpec], values: list[float]
             if spec.env_key not in envs:
                 envs[spec.env_key] = make_env(
                     req.env_id, spec.controller, req.controller_overrides, spec.preset,
-                    observation=spec.observation, robot=spec.robot)
+                    observation=spec.observation, robot=spec.robot,
+                    robot_overrides=req.robot_overrides)
             if spec.carry:
                 check_carries(spec, envs[spec.env_key], req.env_id)
         first = next(iter(envs.values()))
@@ -223,6 +227,8 @@ def prepare(req: SweepRequest) -> Plan:
             raise InvalidArgumentError(
                 f"{'; '.join(above)}: above the FR3's hardware limits (87 Nm x4, 12 Nm x3, "
                 "1000 Nm/s); pass --beyond-hardware-limits to run it anyway (run.json records it)")
+    if req.robot_overrides:  # bad robot fields fail here too, in one line
+        apply_robot_overrides(None, req.robot_overrides).resolved_realism()
     if req.video_episodes < 0:
         raise InvalidArgumentError(f"--video must be >= 0, got {req.video_episodes}")
     if req.video_episodes:  # an encoder and a GL context, before anything is written
@@ -239,6 +245,7 @@ def prepare(req: SweepRequest) -> Plan:
     identity = runinfo.RunIdentity(
         env=req.env_id, seed=req.seed, param_name=info.param_name,
         controller_overrides=tuple(req.controller_overrides),
+        robot_overrides=tuple(req.robot_overrides),
         methods=tuple(s.name for s in specs), values=tuple(values), episodes=req.episodes,
         method_controllers={s.name: s.settings for s in specs}, bin_highs=highs)
     if continuing:
@@ -261,6 +268,7 @@ def prepare(req: SweepRequest) -> Plan:
         workers=req.workers,
         envs_per_worker=req.envs_per_worker,
         controller_overrides=tuple(req.controller_overrides),
+        robot_overrides=tuple(req.robot_overrides),
         video_episodes=req.video_episodes,
         video_dir=str(req.out / "videos"),
         executor=req.executor,

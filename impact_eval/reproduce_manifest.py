@@ -52,6 +52,8 @@ def sweep_argv(args: dict) -> list[str]:
         argv += ["--param", args["param"]]
     for override in args.get("controller_overrides") or ():
         argv += ["--controller-set", override]
+    for override in args.get("robot_overrides") or ():
+        argv += ["--robot-set", override]
     if args.get("beyond_hardware_limits"):
         argv.append("--beyond-hardware-limits")
     return argv

@@ -163,9 +163,13 @@ class RunIdentity:
     controller cannot resume the earlier rows)."""
     bin_highs: tuple[float, ...] = ()
     """``--mass-bins``: each bin's upper edge (``values``: their lower edges); empty: a grid."""
+    robot_overrides: tuple[str, ...] = ()
+    """``--robot-set``; a run recorded before the option existed had none."""
 
 
 _EXTENDABLE = ("methods", "values", "bin_highs")
+_ADDED_LATER: dict[str, list] = {"robot_overrides": []}
+"""Identity keys that runs recorded before them lack, with the value those runs had."""
 REQUIRED_KEYS = ("env", "seed", "methods", "values", "episodes")
 """Keys without which a recorded identity cannot be checked (then ``--resume`` refuses)."""
 
@@ -189,9 +193,9 @@ def check_resumable(recorded: dict | None, now: RunIdentity, extend: bool = Fals
     _check_controllers(recorded.get("method_controllers"), now.method_controllers)
     args = recorded
     for key, value in asdict(now).items():
-        if key not in args or key == "method_controllers":
+        if key == "method_controllers" or (key not in args and key not in _ADDED_LATER):
             continue
-        was = args[key]
+        was = args.get(key, _ADDED_LATER.get(key))
         now_list = list(value) if isinstance(value, tuple) else value
         growable = key in _EXTENDABLE
         if was == now_list or (growable and set(was) == set(now_list)):

@@ -51,6 +51,8 @@ class SweepConfig:
     workers: int
     envs_per_worker: int
     controller_overrides: tuple[str, ...] = ()
+    robot_overrides: tuple[str, ...] = ()
+    """``--robot-set FIELD=VALUE`` on every method's robot (``RobotOptions`` fields)."""
     """``SECTION.FIELD=VALUE`` changes of the controller config (ablations; empty: paper's)."""
     video_episodes: int = 0
     """Record the first this many episodes of every cell as MP4 (``--video``)."""
@@ -144,7 +146,8 @@ class Worker:
         envs = self.envs.setdefault(spec.env_key, [])
         while len(envs) < n:
             envs.append(method_env(self.cfg.env_id, spec, self.cfg.controller_overrides,
-                                   render=self.cfg.video_episodes > 0))
+                                   render=self.cfg.video_episodes > 0,
+                                   robot_overrides=self.cfg.robot_overrides))
         return envs
 
     def _policy(self, method: str) -> Policy:

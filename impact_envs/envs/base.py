@@ -33,13 +33,11 @@ from impact_envs.envs.carry import ControllerCarry, apply_carry, check_carry, co
 from impact_envs.envs.observation_space import state_space
 from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.envs.pixels import PixelObservations, check_view
+from impact_envs.envs.robot_parts import build_robot
 from impact_envs.envs.state import EnvState, capture, restore
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import ClosedLoop, TickTargets
 from impact_envs.rates import CONTROL_HZ, POLICY_HZ
-from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
-from impact_envs.robot.noise import SensorNoise
-from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import Task, refresh_constants
 
 
@@ -85,19 +83,18 @@ class ImpactEnv(gym.Env):
         self.terminate_on_success = bool(terminate_on_success)
         self.persist_internal_model = bool(persist_internal_model)
         self.task = task = self.make_task() if task is None else load_task(task)
-        noise = SensorNoise() if robot.sensor_noise else SensorNoise.off()
-        hand, grasp_force_n = robot.grasp(task.hand)
-        self.sim = FrankaSim(task.scene_xml, task.object_bodies, grasp_force_n=grasp_force_n,
-                             hand=hand, noise=noise, torque_reading=robot.torque_reading)
+        self.sim, self.dynamics, self.realism = build_robot(robot, task.scene_xml,
+                                                            task.object_bodies, task.hand)
+        self.robot_profile = robot.realism
+        """The robot profile's name (``info["robot_profile"]``; ``RobotOptions.realism``)."""
         task.bind(self.sim)
         self._params = initial_params(task, object_mass, task_params)
-        perturbation = ModelPerturbation(link_mass_scale=1.0 + float(robot.model_mass_error))
-        self.dynamics = PinocchioArm(perturbation=perturbation)
         cfg, self.controller_preset = controller_config(controller_preset)
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
         self.controller = ImpactController(self.dynamics, cfg, mode=controller)
         self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
-                               task.before_tick if task.has_tick_hook else None)
+                               task.before_tick if task.has_tick_hook else None,
+                               command_loss_rate=self.realism.command_loss_rate)
         self._warm: ModelSnapshot | None = None
         self._carry: ControllerCarry | None = None
         self._camera, self._size = render.camera, (int(render.height), int(render.width))
@@ -291,6 +288,8 @@ class ImpactEnv(gym.Env):
                               slerp(quat0, quat1, alphas),
                               self.np_random.standard_normal((n, 21)), gripper, wrench_cmd,
                               learn_mask)
+        self.sim.drift_offsets(n * self.sim.dt, self.np_random)  # draws only if it drifts
+        self.loop.loss_rng = self.np_random  # drawn from only if commands may be lost
         trace = self.loop.run(targets)
         self._q_meas, self._dq_meas = trace.q, trace.dq
         power = np.abs(np.einsum("ij,ij->i", trace.taus, trace.qvels))  # |tau . qdot| [W]

@@ -4,11 +4,14 @@ observations."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, fields, replace
 from numbers import Integral, Real
 
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.robot.hand import HANDS, check_grasp_force, check_hand
+from impact_envs.robot.realism import REALISMS as REALISMS  # re-exported
+from impact_envs.robot.realism import Realism
 from impact_envs.robot.sim import TORQUE_READINGS as TORQUE_READINGS  # re-exported
 from impact_envs.robot.sim import check_torque_reading
 
@@ -34,6 +37,12 @@ def _pixels(name: str, value: object) -> None:
             1 <= value <= MAX_RENDER_PX):
         raise InvalidArgumentError(
             f"invalid {name} {value!r}; valid: an integer from 1 to {MAX_RENDER_PX} px")
+
+
+REALISM_FIELDS = ("tau_offset_std_nm", "tau_offset_drift_nm_per_sqrt_s", "model_link_mass_std",
+                  "model_com_std_m", "model_inertia_std", "model_seed", "delay_ticks",
+                  "command_loss_rate", "encoder_step_rad")
+"""``RobotOptions`` fields that override one value of the realism profile each."""
 
 
 @dataclass(frozen=True)
@@ -62,6 +71,15 @@ class RobotOptions:
               noise and no bias: an echo of the command, not a sensor (the paper authors'
               simulation). Encoder noise on q / dq is unchanged (``sensor_noise``). Joint
               damping and Coulomb friction then read as external forces to the estimator.
+        realism: The robot profile, one of ``REALISMS`` (``robot/realism.py``,
+            docs/sensing.md "Realism profiles"): ``"ideal"`` (default; every result before
+            issue 39, bit for bit) or ``"fr3"`` (an averaged dynamics model, drifting
+            torque-sensor offsets, a one-tick delay, quantized encoders).
+        tau_offset_std_nm, tau_offset_drift_nm_per_sqrt_s, model_link_mass_std,
+        model_com_std_m, model_inertia_std, model_seed, delay_ticks, command_loss_rate,
+        encoder_step_rad: One field of the profile each (``Realism``'s attributes give
+            units and meaning); None (default): the profile's value. An explicit value
+            overrides the profile.
     """
 
     sensor_noise: bool = True
@@ -69,8 +87,19 @@ class RobotOptions:
     model_mass_error: float = 0.0
     torque_reading: str = "link_side"
     hand: str | None = None
+    realism: str = "ideal"
+    tau_offset_std_nm: float | None = None
+    tau_offset_drift_nm_per_sqrt_s: float | None = None
+    model_link_mass_std: float | None = None
+    model_com_std_m: float | None = None
+    model_inertia_std: float | None = None
+    model_seed: int | None = None
+    delay_ticks: int | None = None
+    command_loss_rate: float | None = None
+    encoder_step_rad: float | None = None
 
     def __post_init__(self) -> None:
+        self.resolved_realism()  # one line on an unknown profile or a bad field
         if not isinstance(self.sensor_noise, bool):
             raise InvalidArgumentError(
                 f"invalid sensor_noise {self.sensor_noise!r}; valid: True or False")
@@ -80,6 +109,14 @@ class RobotOptions:
             check_grasp_force(self.grasp_force_n, self.hand or LARGEST_HAND)
         _real("model_mass_error", self.model_mass_error, -0.9, 10.0, "")
         check_torque_reading(self.torque_reading)
+
+    def resolved_realism(self) -> Realism:
+        """The profile ``realism`` with this option's explicit fields on top."""
+        if not isinstance(self.realism, str):
+            raise InvalidArgumentError(
+                f"invalid realism {self.realism!r}; valid choices: {', '.join(REALISMS)}")
+        return Realism.resolve(self.realism, **{name: getattr(self, name)
+                                                for name in REALISM_FIELDS})
 
     def grasp(self, task_hand: str) -> tuple[str, float]:
         """``(hand, grasp force [N])`` on a task whose hand is ``task_hand``: this option's
@@ -159,3 +196,40 @@ class ObservationOptions:
     def uses_images(self) -> bool:
         """Whether the observation holds camera images (every mode but ``"state"``)."""
         return self.obs_mode != "state"
+
+
+def apply_robot_overrides(robot: RobotOptions | None, overrides: Sequence[str]) -> RobotOptions:
+    """``robot`` (default ``RobotOptions()``) with ``FIELD=VALUE`` overrides on top, e.g.
+    ``("realism=fr3", "delay_ticks=0")`` (``impact-eval --robot-set``); a value is read as the
+    field's type (``true``/``false`` for booleans, ``none`` for an optional field's None).
+    One-line ``InvalidArgumentError`` naming the valid fields or values."""
+    base = robot if robot is not None else RobotOptions()
+    names = [f.name for f in fields(RobotOptions)]
+    changes: dict[str, object] = {}
+    for item in overrides:
+        name, sep, text = str(item).partition("=")
+        name = name.strip()
+        if not sep or name not in names:
+            raise InvalidArgumentError(
+                f"invalid --robot-set {item!r}; valid: FIELD=VALUE with FIELD one of "
+                f"{', '.join(names)}")
+        changes[name] = _parse_field(name, text.strip(), getattr(RobotOptions(), name))
+    return replace(base, **changes)
+
+
+def _parse_field(name: str, text: str, default: object) -> object:
+    """``text`` as ``RobotOptions.name``'s value (its default's type; None-able fields)."""
+    low = text.lower()
+    if low == "none" and name != "realism":
+        return None
+    if isinstance(default, bool):
+        if low in ("true", "false"):
+            return low == "true"
+        raise InvalidArgumentError(f"invalid --robot-set {name}={text!r}; valid: true or false")
+    if isinstance(default, str) or name in ("hand", "realism", "torque_reading"):
+        return text
+    try:
+        return int(text) if name in ("model_seed", "delay_ticks") else float(text)
+    except ValueError:
+        raise InvalidArgumentError(
+            f"invalid --robot-set {name}={text!r}; valid: a number") from None

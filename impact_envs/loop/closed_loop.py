@@ -65,11 +65,19 @@ class ClosedLoop:
         dynamics: The controller's arm model (its ``chain_terms`` arrays).
         controller: The controller; ``reset`` it before ``run``.
         tick_hook: Called as ``tick_hook(sim, time_s)`` before every tick, or None.
+        command_loss_rate: Probability that a tick's command is lost (the drives repeat
+            their last torque); the draws come from ``loss_rng`` (set it before ``run``), none
+            are made at 0.
     """
 
     def __init__(self, sim: FrankaSim, dynamics: PinocchioArm, controller: ImpactController,
-                 tick_hook: Callable[[FrankaSim, float], None] | None = None) -> None:
+                 tick_hook: Callable[[FrankaSim, float], None] | None = None,
+                 command_loss_rate: float = 0.0) -> None:
         self.sim, self.controller, self.tick_hook = sim, controller, tick_hook
+        self.command_loss_rate = float(command_loss_rate)
+        self.loss_rng = np.random.default_rng(0)
+        """Source of the lost-command draws (the env reseeds it each episode)."""
+        self._no_loss = np.zeros(0, dtype=np.uint8)
         self.arm = ArmArrays(dynamics.chain, dynamics.chain_work, bool(dynamics.need_coriolis),
                              dynamics.q_model, dynamics.dq_model, dynamics.model_arrays)
         self._dyn = dynamics_arrays(dynamics)
@@ -99,7 +107,7 @@ class ClosedLoop:
         ctrl.set_gripper_command(targets.gripper_cmd)  # the payload model's hold-off reads it
         plan = StepPlan(targets.noise, targets.positions, targets.quats, np.empty((n, 7)),
                         np.empty((n, 7)), np.empty(21), float(targets.gripper_cmd), cmd, mask,
-                        self._fric_model)
+                        self._fric_model, self._lost(n))
         parts = (plan, sim.loop_arrays(), self.arm, self._dyn, ctrl.kernel_state())
         friction = sim.frictionloss_reader()  # the friction inside the torque reading
         bundle, tick = self._entries(parts, friction)
@@ -124,6 +132,14 @@ class ClosedLoop:
         peak_robot, peak_obj = (max(float(v), 0.0) for v in contact.max(axis=0))
         return StepTrace(plan.taus, plan.qvels, q, dq, peak_robot, peak_obj,
                          contact[:, 0], contact[:, 1])
+
+    def _lost(self, n: int) -> np.ndarray:
+        """(n,) uint8: 1 where a tick's command is lost (drawn only when the rate is > 0)."""
+        if self.command_loss_rate > 0.0:
+            return (self.loss_rng.random(n) < self.command_loss_rate).astype(np.uint8)
+        if self._no_loss.shape[0] != n:
+            self._no_loss = np.zeros(n, dtype=np.uint8)
+        return self._no_loss
 
     def _raise_or_learn(self, i: int, flags: int, plan: StepPlan,
                         learn_mask: np.ndarray | None) -> None:

@@ -26,7 +26,7 @@ from impact_envs.control.kernels import (
     unpack_limiter,
 )
 from impact_envs.robot.chain_dynamics import chain_terms
-from impact_envs.robot.sim_kernels import actuate, sense
+from impact_envs.robot.sim_kernels import send, sense
 
 
 class StepPlan(NamedTuple):
@@ -38,7 +38,8 @@ class StepPlan(NamedTuple):
     ``ClosedLoop``); ``sensed`` (21,) output: the last readings [q, dq, tau];
     ``gripper_cmd`` in [-1, 1]; ``wrench_cmd`` (6,) [N, Nm] and ``mask`` (6,) float32 as
     ``ImpactController.loop_inputs`` gives them; ``fric_model`` (7,) zeros (the loop feeds no
-    joint-friction model).
+    joint-friction model); ``lost`` (n,) uint8: 1 where the tick's command is lost (the
+    drives repeat their last torque).
     """
 
     noise: np.ndarray
@@ -51,6 +52,7 @@ class StepPlan(NamedTuple):
     wrench_cmd: np.ndarray
     mask: np.ndarray
     fric_model: np.ndarray
+    lost: np.ndarray
 
 
 class ArmArrays(NamedTuple):
@@ -98,8 +100,9 @@ def loop_tick(i, frictionloss, plan, sim, arm, dyn, state) -> int:
                                 width, plan.fric_model, dyn, state)
     if not flags & (BAD_INPUT | BAD_QUAT | NON_FINITE):
         tau = unpack_limiter(state.lim.buffer, state.lim.scalars)[0].output
-        actuate(tau, sim.torque_limits, sim.tau_applied, sim.ctrl, sim.arm_act, sim.gripper_act,
-                plan.gripper_cmd)
+        send(tau, sim.torque_limits, sim.tau_applied, sim.ctrl, sim.arm_act, sim.gripper_act,
+             plan.gripper_cmd, sim.tau_pending, sim.tau_scratch, sim.delay_ticks,
+             plan.lost[i] != 0)
     for j in range(n):
         plan.taus[i, j] = sim.tau_applied[j]
     return flags

@@ -36,12 +36,19 @@ class ModelPerturbation:
 
     Attributes:
         link_mass_scale: factor applied to every link's mass and rotational inertia [-].
-        link_mass_noise: std of an extra per-link relative factor ``1 + noise * N(0, 1)`` [-].
-        seed: seed of the per-link noise.
+        link_mass_noise: std of an extra per-link relative factor ``1 + noise * N(0, 1)`` on
+            mass and rotational inertia [-].
+        com_noise_m: std of a per-link centre-of-mass shift, per axis of the link frame [m].
+        inertia_noise: std of a further per-link relative factor on the rotational inertia
+            alone [-] (clipped to keep it positive).
+        seed: seed of the per-link noise (the three kinds draw from separate streams, so
+            one's draws do not depend on whether another is on).
     """
 
     link_mass_scale: float = 1.0
     link_mass_noise: float = 0.0
+    com_noise_m: float = 0.0
+    inertia_noise: float = 0.0
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -49,21 +56,26 @@ class ModelPerturbation:
             raise InvalidArgumentError(
                 f"link_mass_scale must be > 0, got {self.link_mass_scale}"
             )
-        if not 0.0 <= self.link_mass_noise < 0.5:
-            raise InvalidArgumentError(
-                f"link_mass_noise must be in [0, 0.5), got {self.link_mass_noise}"
-            )
+        for name, high in (("link_mass_noise", 0.5), ("inertia_noise", 0.5),
+                           ("com_noise_m", 0.05)):
+            if not 0.0 <= getattr(self, name) < high:
+                raise InvalidArgumentError(
+                    f"{name} must be in [0, {high:g}), got {getattr(self, name)}")
 
 
 def _perturb(model: pin.Model, perturbation: ModelPerturbation) -> None:
     rng = np.random.default_rng(perturbation.seed)
+    com_rng = np.random.default_rng([perturbation.seed, 1])
+    inertia_rng = np.random.default_rng([perturbation.seed, 2])
     for i in range(1, model.njoints):
         factor = perturbation.link_mass_scale * (
             1.0 + perturbation.link_mass_noise * rng.standard_normal()
         )
         inertia = model.inertias[i]
+        lever = inertia.lever.copy() + perturbation.com_noise_m * com_rng.standard_normal(3)
+        rot_factor = max(1.0 + perturbation.inertia_noise * inertia_rng.standard_normal(), 0.1)
         model.inertias[i] = pin.Inertia(
-            inertia.mass * factor, inertia.lever.copy(), inertia.inertia * factor
+            inertia.mass * factor, lever, inertia.inertia * factor * rot_factor
         )
 
 

@@ -8,6 +8,7 @@ names that say so; the controller never sees it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
@@ -24,10 +25,10 @@ from impact_envs.robot.sim_kernels import (
     GROUP_OBJECT,
     GROUP_OTHER,
     GROUP_ROBOT,
-    actuate,
     contact_sums,
     count_body_contacts,
     link_torque,
+    send,
     sense,
     state_status,
 )
@@ -50,13 +51,16 @@ def check_torque_reading(value: object) -> None:
 class SimArrays(NamedTuple):
     """What the closed loop's per-tick kernel reads and writes in the simulator.
 
-    ``noise_stds`` = [q, dq, tau] sensor noise [rad, rad/s, Nm]; the arm's ``qpos``,
+    ``noise_stds`` = [q, dq, tau] sensor noise [rad, rad/s, Nm] and the encoder step [rad]
+    (0: none); the arm's ``qpos``,
     ``qvel``, ``qfrc_actuator`` and ``qfrc_damper`` as views of ``MjData`` (with
     ``torque_reading="commanded"`` the damper is a zero array, and the tau noise and the
     bias are zero); ``tau_bias`` the episode's torque-sensor bias [Nm]; ``qpos`` all of it
     (fingers at ``finger_i``/``_j``); ``torque_limits`` the hardware limits [Nm];
     ``tau_applied`` the last torque sent [Nm]; ``ctrl`` MuJoCo's controls, with the arm's
-    actuators at ``arm_act`` and the gripper's at ``gripper_act``.
+    actuators at ``arm_act`` and the gripper's at ``gripper_act``; ``tau_pending`` the
+    command waiting for the next tick when ``delay_ticks`` is 1, ``tau_scratch`` a work array
+    (``sim_kernels.send``).
     """
 
     noise_stds: np.ndarray
@@ -73,6 +77,9 @@ class SimArrays(NamedTuple):
     ctrl: np.ndarray
     arm_act: np.ndarray
     gripper_act: int
+    tau_pending: np.ndarray
+    tau_scratch: np.ndarray
+    delay_ticks: int
 
 
 
@@ -97,6 +104,10 @@ class FrankaSim:
         torque_reading: one of ``TORQUE_READINGS``: the link-side torque sensors
             (``"link_side"``) or the applied torque, noise- and bias-free (``"commanded"``);
             encoder noise is the same in both.
+        delay_ticks: 0, or 1: a command reaches the drives one tick after it is sent
+            (``robot/realism.py``).
+        offset_drift_nm_per_sqrt_s: random-walk intensity of the torque-sensor offsets
+            [Nm/sqrt(s)] (``drift_offsets``; none in a ``"commanded"`` reading).
     """
 
     def __init__(
@@ -108,8 +119,12 @@ class FrankaSim:
         hand: str = "franka_hand",
         noise: SensorNoise | None = None,
         torque_reading: str = "link_side",
+        delay_ticks: int = 0,
+        offset_drift_nm_per_sqrt_s: float = 0.0,
     ) -> None:
         check_torque_reading(torque_reading)
+        self.delay_ticks = int(delay_ticks)
+        self.offset_drift_nm_per_sqrt_s = float(offset_drift_nm_per_sqrt_s)
         self._commanded = torque_reading == "commanded"
         self._zero_torque = np.zeros(7)
         """Stands in for damping, friction (and bias) in a ``"commanded"`` reading."""
@@ -130,13 +145,18 @@ class FrankaSim:
         self.geom_group = self._classify_geoms(object_bodies)
         self._tau_bias = np.zeros(7)
         self.tau_applied = np.zeros(7)
+        self.tau_pending = np.zeros(7)
+        self._tau_scratch = np.zeros(7)
         self._init_fast_paths()
 
 
     def state_arrays(self) -> dict[str, np.ndarray]:
         """The arrays besides ``model`` / ``data`` that carry the simulation from one step to
         the next, by name, live (``ImpactEnv.get_state`` copies them)."""
-        return {"tau_bias": self._tau_bias, "tau_applied": self.tau_applied}
+        arrays = {"tau_bias": self._tau_bias, "tau_applied": self.tau_applied}
+        if self.delay_ticks:  # ideal robots keep their saved states' names
+            arrays["tau_pending"] = self.tau_pending
+        return arrays
 
     def _init_fast_paths(self) -> None:
         """Buffers and ids of the per-tick helpers (friction rows, fingers, bound views)."""
@@ -161,7 +181,8 @@ class FrankaSim:
     def noise(self, value: SensorNoise) -> None:
         self._noise = value
         tau_std = 0.0 if self._commanded else value.tau_std_nm
-        self._noise_stds = np.array([value.q_std_rad, value.dq_std_rad_s, tau_std])
+        self._noise_stds = np.array([value.q_std_rad, value.dq_std_rad_s, tau_std,
+                                     value.q_step_rad])
 
     @property
     def torque_reading(self) -> str:
@@ -214,8 +235,17 @@ class FrankaSim:
         d.ctrl[:] = 0.0
         d.ctrl[self.gripper_act] = finger_opening_m
         self.tau_applied[:] = 0.0
+        self.tau_pending[:] = 0.0
         bias_std = 0.0 if self._commanded else self.noise.tau_bias_std_nm
-        self._tau_bias = bias_std * rng.standard_normal(7)  # drawn in both readings
+        self._tau_bias[:] = bias_std * rng.standard_normal(7)  # drawn in both readings
+
+    def drift_offsets(self, dt_s: float, rng: np.random.Generator) -> None:
+        """Let the torque-sensor offsets wander for ``dt_s`` seconds: each joint's offset
+        gets ``offset_drift_nm_per_sqrt_s * sqrt(dt_s) * N(0, 1)`` [Nm] (nothing drawn when
+        the intensity is 0 or the reading is ``"commanded"``)."""
+        if self.offset_drift_nm_per_sqrt_s > 0.0 and not self._commanded:
+            self._tau_bias += (self.offset_drift_nm_per_sqrt_s * math.sqrt(dt_s)
+                               * rng.standard_normal(7))
 
     def arm_state(self) -> tuple[np.ndarray, np.ndarray]:
         """True joint positions [rad] and velocities [rad/s] (privileged)."""
@@ -279,7 +309,8 @@ class FrankaSim:
         finger_i, finger_j = self._finger_ids
         return SimArrays(self._noise_stds, qpos_arm, qvel_arm, qfrc_actuator, qfrc_damper,
                          self._tau_bias, self._qpos, finger_i, finger_j, self.torque_limits,
-                         self.tau_applied, self._ctrl, self.arm_act, int(self.gripper_act))
+                         self.tau_applied, self._ctrl, self.arm_act, int(self.gripper_act),
+                         self.tau_pending, self._tau_scratch, self.delay_ticks)
 
     def true_joint_torque(self) -> np.ndarray:
         """Noise-free link-side joint torque of the last step [Nm] (a new array).
@@ -331,13 +362,15 @@ class FrankaSim:
 
     # --------------------------------------------------------------- actuation
     def apply(self, tau: np.ndarray, gripper_cmd: float) -> None:
-        """Set joint torques [Nm] (saturated at the FR3 limits) and the gripper command.
+        """Send joint torques [Nm] (saturated at the FR3 limits) and the gripper command;
+        with ``delay_ticks`` = 1 the drives get the torque sent one call before.
 
         ``gripper_cmd`` in [-1, 1]: -1 fully open (0.08 m), +1 closed (force-limited squeeze).
         """
         self._arm_views()
-        actuate(np.asarray(tau, dtype=np.float64), self.torque_limits, self.tau_applied,
-                 self._ctrl, self.arm_act, self.gripper_act, float(gripper_cmd))
+        send(np.asarray(tau, dtype=np.float64), self.torque_limits, self.tau_applied,
+             self._ctrl, self.arm_act, self.gripper_act, float(gripper_cmd), self.tau_pending,
+             self._tau_scratch, self.delay_ticks, False)
 
     def step(self) -> None:
         """Advance the physics by one control tick (``dt``)."""

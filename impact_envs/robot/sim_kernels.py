@@ -24,12 +24,16 @@ def link_torque(qfrc_actuator, qfrc_damper, frictionloss, out) -> None:
 
 @njit(cache=True)
 def sense(z, stds, qpos, qvel, qfrc_actuator, qfrc_damper, frictionloss, bias, out) -> None:
-    """out = [q, dq, tau] readings: true values + stds * z (tau also + bias), z (3n,)."""
+    """out = [q, dq, tau] readings: true values + stds[:3] * z (tau also + bias), z (3n,);
+    q then rounded to a multiple of ``stds[3]`` [rad] when it is above 0 (encoder steps)."""
     n = qpos.shape[0]
     tau = out[2 * n:]
     link_torque(qfrc_actuator, qfrc_damper, frictionloss, tau)
+    step = stds[3]
     for j in range(n):
         out[j] = qpos[j] + stds[0] * z[j]
+        if step > 0.0:
+            out[j] = step * math.floor(out[j] / step + 0.5)
         out[n + j] = qvel[j] + stds[1] * z[n + j]
         tau[j] = tau[j] + bias[j] + stds[2] * z[2 * n + j]
 
@@ -55,6 +59,25 @@ def actuate(tau, torque_limits, tau_applied, ctrl, arm_act, gripper_act, gripper
     if g < -1.0:
         g = -1.0
     ctrl[gripper_act] = 0.02 * (1.0 - g)
+
+
+@njit(cache=True)
+def send(tau, torque_limits, tau_applied, ctrl, arm_act, gripper_act, gripper_cmd,
+         tau_pending, scratch, delay_ticks, lost) -> None:
+    """``actuate`` as the robot receives the command: with ``delay_ticks`` = 1 the drives get
+    the torque of the previous call (``tau`` waits in ``tau_pending``; ``scratch`` carries
+    the one leaving it, ``tau`` itself is not written); a ``lost`` command leaves the arm's
+    drives on the last torque they applied (the gripper, a device of its own, still gets its
+    command)."""
+    if lost:  # it never arrives: the queue keeps what it held
+        actuate(tau_applied, torque_limits, tau_applied, ctrl, arm_act, gripper_act, gripper_cmd)
+    elif delay_ticks > 0:
+        for j in range(tau.shape[0]):
+            scratch[j] = tau_pending[j]
+            tau_pending[j] = tau[j]
+        actuate(scratch, torque_limits, tau_applied, ctrl, arm_act, gripper_act, gripper_cmd)
+    else:
+        actuate(tau, torque_limits, tau_applied, ctrl, arm_act, gripper_act, gripper_cmd)
 
 
 @njit(cache=True)

@@ -39,6 +39,7 @@ minimum and maximum over the repeats; ``timeseries.csv`` and the figure show the
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 from dataclasses import replace
@@ -50,6 +51,7 @@ import pandas as pd
 
 import impact_envs
 from impact_envs.cli import OneLineParser
+from impact_envs.envs.options import RobotOptions, apply_robot_overrides
 from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.interface import stack_obs
@@ -88,15 +90,18 @@ def protocol_expert(env_id: str, hold_s: float) -> PickPlaceExpert:
 
 
 def run_sequence(env_id: str, controller: str, masses: tuple[float, ...],
-                 seed: int, hold_s: float = 0.0) -> pd.DataFrame:
+                 seed: int, hold_s: float = 0.0,
+                 robot: RobotOptions | None = None) -> pd.DataFrame:
     """Run one episode per mass with a persistent internal model; rows at 30 Hz.
 
-    ``controller``: a key of ``PROTOCOL_CONTROLLERS``.
+    ``controller``: a key of ``PROTOCOL_CONTROLLERS``; ``robot``: the env's robot (default:
+    the env's own, the ideal robot).
     """
     expert = protocol_expert(env_id, hold_s)
     mode, preset = PROTOCOL_CONTROLLERS[controller]
+    extra = {} if robot is None else {"robot": robot}
     env = gym.make(env_id, controller=mode, controller_preset=preset,
-                   persist_internal_model=True, terminate_on_success=True)
+                   persist_internal_model=True, terminate_on_success=True, **extra)
     param = env.unwrapped.param_name
     rows, t_offset = [], 0.0
     for episode, mass in enumerate(masses):
@@ -279,6 +284,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="hold the object still above the goal this long before lowering [s]")
     parser.add_argument("--repeats", type=int, default=1,
                         help=f"sequences, base seeds seed + {REPEAT_SEED_STRIDE} k")
+    parser.add_argument("--robot-set", action="append", default=[], metavar="FIELD=VALUE",
+                        help="the robot, as impact-eval --robot-set, e.g. realism=fr3 "
+                             "(kept in OUT/robot.json)")
     parser.add_argument("--out", type=Path, default=Path("results/protocol"))
     args = parser.parse_args(argv)
     try:
@@ -288,7 +296,10 @@ def main(argv: list[str] | None = None) -> int:
         if args.repeats < 1:
             raise ValueError(f"--repeats must be >= 1, got {args.repeats}")
         protocol_expert(args.env, args.hold_s)  # validates env and hold
+        robot = apply_robot_overrides(None, args.robot_set)
+        robot.resolved_realism()  # validates the profile
         args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "robot.json").write_text(json.dumps({"robot_set": args.robot_set}) + "\n")
     except (ImpactError, ValueError, OSError) as exc:
         print(f"impact-protocol: error: {exc}", file=sys.stderr)
         return 2
@@ -296,7 +307,7 @@ def main(argv: list[str] | None = None) -> int:
     metrics = []
     for k in range(args.repeats):
         seed = args.seed + REPEAT_SEED_STRIDE * k
-        df = pd.concat([run_sequence(args.env, c, masses, seed, args.hold_s)
+        df = pd.concat([run_sequence(args.env, c, masses, seed, args.hold_s, robot)
                         for c in PROTOCOL_CONTROLLERS], ignore_index=True)
         if k == 0:
             df.to_csv(args.out / "timeseries.csv", index=False)

@@ -24,10 +24,11 @@ import numpy as np
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.lie import matrix_to_quat, so3_exp
 from impact_envs.control.presets import preset_config
+from impact_envs.envs.options import RobotOptions, apply_robot_overrides
+from impact_envs.envs.robot_parts import build_robot
 from impact_envs.loop import control_tick
 from impact_envs.robot.dynamics import PinocchioArm
 from impact_envs.robot.ik import HOME_Q, solve_ik
-from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.sim import FrankaSim
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])
@@ -44,9 +45,12 @@ class Rig:
 
     @classmethod
     def build(cls, scene: str, mode: str, estimator: str, seed: int, noise: bool = True,
-              preset: str = "default") -> Rig:
-        sim = FrankaSim(scene, (), noise=SensorNoise() if noise else SensorNoise.off())
-        arm = PinocchioArm()
+              preset: str = "default", robot: RobotOptions | None = None) -> Rig:
+        """``robot`` (default: the ideal robot, ``noise`` as its ``sensor_noise``) gives the
+        simulator and the controller's model (``build_robot``: a profile's model errors,
+        offsets, delay and encoder steps; its offsets do not drift here, a rig's runs last
+        seconds)."""
+        sim, arm, _ = build_robot(robot or RobotOptions(sensor_noise=noise), scene)
         cfg = preset_config(preset, estimator=estimator)
         return cls(sim, arm, ImpactController(arm, cfg, mode=mode), np.random.default_rng(seed))
 
@@ -80,13 +84,14 @@ def _apply_wrench_at_tcp(sim: FrankaSim, force: np.ndarray, torque: np.ndarray) 
 
 
 def wrench_recovery(
-    estimator: str, n_poses: int = 5, seed: int = 0, settle_s: float = 1.0, measure_s: float = 4.0
+    estimator: str, n_poses: int = 5, seed: int = 0, settle_s: float = 1.0, measure_s: float = 4.0,
+    robot: RobotOptions | None = None,
 ) -> list[dict[str, float]]:
     """Force/torque estimation errors [N, Nm] at steady state in ``n_poses`` random poses."""
     rng = np.random.default_rng(seed)
     rows = []
     for i in range(n_poses):
-        rig = Rig.build("payload_scene.xml", "impedance", estimator, seed + i)
+        rig = Rig.build("payload_scene.xml", "impedance", estimator, seed + i, robot=robot)
         rig.sim.model.body_mass[rig.sim.model.body("payload").id] = 1e-6
         pos = rng.uniform([0.35, -0.2, 0.2], [0.55, 0.2, 0.5])
         rot = so3_exp(rng.uniform(-0.3, 0.3, 3)) @ R_DOWN
@@ -108,12 +113,13 @@ def wrench_recovery(
     return rows
 
 
-def noise_floor(n_poses: int = 5, seed: int = 0, measure_s: float = 3.0) -> dict[str, float]:
+def noise_floor(n_poses: int = 5, seed: int = 0, measure_s: float = 3.0,
+                robot: RobotOptions | None = None) -> dict[str, float]:
     """Force noise [N] of the raw estimate and of w_slow (default preset) at rest, no load."""
     rng = np.random.default_rng(seed)
     raw, slow = [], []
     for i in range(n_poses):
-        rig = Rig.build("payload_scene.xml", "impedance", "residual", seed + i)
+        rig = Rig.build("payload_scene.xml", "impedance", "residual", seed + i, robot=robot)
         rig.sim.model.body_mass[rig.sim.model.body("payload").id] = 1e-6
         pos = rng.uniform([0.35, -0.2, 0.2], [0.55, 0.2, 0.5])
         rot = so3_exp(rng.uniform(-0.3, 0.3, 3)) @ R_DOWN
@@ -134,14 +140,15 @@ def noise_floor(n_poses: int = 5, seed: int = 0, measure_s: float = 3.0) -> dict
 
 
 def payload_hold(mode: str, mass_kg: float = 5.0, hold_s: float = 5.0, seed: int = 0,
-                 estimator: str = "residual", preset: str = "default") -> dict[str, float]:
+                 estimator: str = "residual", preset: str = "default",
+                 robot: RobotOptions | None = None) -> dict[str, float]:
     """TCP sag [m] below a fixed target while holding ``mass_kg`` that appears at t = 0.
 
     Returns the sag at 3 s and at the end, the worst sag, the full position error (which also
     holds the joint-friction dead-band), and ``settle_3mm_s``: the time after which the sag
     stays within 3 mm (NaN if it never does).
     """
-    rig = Rig.build("payload_scene.xml", mode, estimator, seed, preset=preset)
+    rig = Rig.build("payload_scene.xml", mode, estimator, seed, preset=preset, robot=robot)
     model = rig.sim.model
     body = model.body("payload").id
     inertia = model.body_inertia[body].copy() / model.body_mass[body]
@@ -171,17 +178,21 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=5)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--robot-set", action="append", default=[], metavar="FIELD=VALUE",
+                        help="as impact-eval --robot-set, e.g. realism=fr3")
     args = parser.parse_args(argv)
+    robot = apply_robot_overrides(None, args.robot_set)
+    print(f"robot: {robot.resolved_realism()}\n")
     print("## Wrench recovery (noise on; tolerance 1 N / 0.1 Nm)")
     print("| estimator | pose | applied force [N] | force error [N] | torque error [Nm] |")
     print("|---|---|---|---|---|")
     for est in ("residual", "momentum"):
-        for r in wrench_recovery(est, args.poses, args.seed):
+        for r in wrench_recovery(est, args.poses, args.seed, robot=robot):
             print(
                 f"| {est} | {r['pose']} | {r['force_applied_n']:.1f} | "
                 f"{r['force_err_n']:.3f} | {r['torque_err_nm']:.4f} |"
             )
-    r = noise_floor(args.poses, args.seed)
+    r = noise_floor(args.poses, args.seed, robot=robot)
     print("\n## Noise floor at rest, no load (force axes; per-pose mean removed)")
     print("| signal | largest per-axis std [N] | largest norm [N] |\n|---|---|---|")
     print(f"| raw estimate | {r['raw_std_n']:.3f} | {r['raw_max_norm_n']:.3f} |")
@@ -191,7 +202,7 @@ def main(argv: list[str] | None = None) -> None:
           "error at 5 s [mm] | max sag [mm] | sag within 3 mm after [s] | m g / K [mm] |")
     print("|---|---|---|---|---|---|---|---|")
     for mode, preset in (("impedance", "default"), ("impact", "default"), ("impact", "paper")):
-        r = payload_hold(mode, seed=args.seed, preset=preset)
+        r = payload_hold(mode, seed=args.seed, preset=preset, robot=robot)
         label = mode if mode == "impedance" else f"{mode} ({preset})"
         print(f"| {label} | {1e3 * r['sag_3s_m']:.1f} | {1e3 * r['error_3s_m']:.1f} | "
               f"{1e3 * r['final_sag_m']:.1f} | {1e3 * r['final_error_m']:.1f} | "

@@ -25,7 +25,9 @@ model's prediction, 0 here: its feedforward is the payload stage's). Sensor nois
 from __future__ import annotations
 
 import argparse
+import json
 import math
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -37,6 +39,7 @@ from impact_envs.cli import OneLineParser
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.presets import preset_config
+from impact_envs.envs.options import RobotOptions, apply_robot_overrides
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import control_tick
 from impact_envs.robot.ik import HOME_Q
@@ -70,10 +73,12 @@ def place_plate(model: mujoco.MjModel, data: mujoco.MjData, tcp: np.ndarray,
     return normal
 
 
-def press(mode: str, angle_deg: float, depth_m: float, hold_s: float, seed: int) -> dict:
-    """One press; the steady force, its growth and the largest prediction."""
+def press(mode: str, angle_deg: float, depth_m: float, hold_s: float, seed: int,
+          robot: RobotOptions | None = None) -> dict:
+    """One press; the steady force, its growth and the largest prediction. ``robot``: the
+    ideal robot with sensor noise by default."""
     ctrl_mode, cfg = mode_controller(mode)
-    rig = Rig.build("press_scene.xml", "impedance", "residual", seed)
+    rig = Rig.build("press_scene.xml", "impedance", "residual", seed, robot=robot)
     rig = Rig(rig.sim, rig.arm, ImpactController(rig.arm, cfg, mode=ctrl_mode), rig.rng)
     sim = rig.sim
     start, quat = rig.start(HOME_Q)
@@ -97,6 +102,18 @@ def press(mode: str, angle_deg: float, depth_m: float, hold_s: float, seed: int)
             "peak_force_n": float(force.max()), "max_pred_n": float(pred.max()),
             "final_pred_n": float(pred[-1]),
             "holds": rig.controller.guard.holds_started}
+
+
+def check_robot_record(out: Path, robot_set: Sequence[str]) -> None:
+    """Keep ``robot_set`` in ``out/robot.json``; InvalidArgumentError (one line) when ``out``
+    holds results of another robot (no file: the ideal robot, ``[]``)."""
+    path = out / "robot.json"
+    had = json.loads(path.read_text())["robot_set"] if path.exists() else []
+    if list(had) != list(robot_set) and (out / "setdown.csv").exists():
+        raise InvalidArgumentError(
+            f"{out} holds set-downs with --robot-set {had or 'none (ideal)'}, not "
+            f"{list(robot_set) or 'none (ideal)'}; valid: the same --robot-set, or another --out")
+    path.write_text(json.dumps({"robot_set": list(robot_set)}) + "\n")
 
 
 def _floats(text: str, flag: str, lo: float, hi: float, unit: str) -> list[float]:
@@ -137,6 +154,8 @@ def _parser() -> OneLineParser:
                         help="set-down traces written to OUT/setdown_traces: failing (impact "
                              "above impedance + 3 N), impact, all, none")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--robot-set", action="append", default=[], metavar="FIELD=VALUE",
+                        help="the robot, as impact-eval --robot-set, e.g. realism=fr3")
     parser.add_argument("--out", type=Path, default=None)
     return parser
 
@@ -157,6 +176,11 @@ def _check(parser: OneLineParser, args: argparse.Namespace) -> None:
         parser.fail(f"invalid --hold-s {args.hold_s}; valid: 2 to 60 s for the set-down")
     if plate and not all(d > 0 for d in args.depths):
         parser.fail(f"invalid --depths {args.depths}; valid: depths > 0 mm")
+    try:
+        args.robot = apply_robot_overrides(None, args.robot_set)
+        args.robot.resolved_realism()
+    except InvalidArgumentError as exc:
+        parser.fail(exc)
 
 
 def run_plate(args: argparse.Namespace, hold_s: float) -> None:
@@ -165,7 +189,7 @@ def run_plate(args: argparse.Namespace, hold_s: float) -> None:
     for angle in args.angles:
         for depth in args.depths:
             for mode in args.modes:
-                rows.append(press(mode, angle, depth * 1e-3, hold_s, args.seed))
+                rows.append(press(mode, angle, depth * 1e-3, hold_s, args.seed, args.robot))
                 r = rows[-1]
                 print(f"{mode:13s} {angle:4.0f} deg {depth:4.0f} mm: steady "
                       f"{r['steady_force_n']:7.1f} N growth {r['growth_after_2s_n']:+6.2f} N "
@@ -178,6 +202,7 @@ def run_plate(args: argparse.Namespace, hold_s: float) -> None:
                                                              strict=True)]
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
+        check_robot_record(args.out, args.robot_set)
         df.to_csv(args.out / "press.csv", index=False, float_format="%.3f")
     print(df.to_string(index=False, float_format=lambda v: f"{v:.1f}"))
 
@@ -186,6 +211,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     _check(parser, args)
+    print(f"robot: {args.robot.resolved_realism()}")
     if args.scenario != "setdown":
         run_plate(args, 8.0 if args.hold_s is None else args.hold_s)
     if args.scenario != "plate":
@@ -193,7 +219,8 @@ def main(argv: list[str] | None = None) -> int:
 
         try:
             df = run_setdown(args.out, args.modes, args.loads_kg, args.setdown_depths,
-                             6.0 if args.hold_s is None else args.hold_s, args.seed, args.traces)
+                             6.0 if args.hold_s is None else args.hold_s, args.seed, args.traces,
+                             args.robot_set)
         except InvalidArgumentError as exc:
             parser.fail(exc)
         print(df.to_string(index=False, float_format=lambda v: f"{v:.1f}"))

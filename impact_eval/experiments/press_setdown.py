@@ -44,14 +44,14 @@ import numpy as np
 import pandas as pd
 
 from impact_envs.control.controller import ImpactController
+from impact_envs.envs.options import RobotOptions, apply_robot_overrides
+from impact_envs.envs.robot_parts import build_robot
 from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.loop import control_tick
-from impact_envs.robot.dynamics import PinocchioArm
 from impact_envs.robot.ik import HOME_Q
-from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.sim import FrankaSim
 from impact_eval.experiments.physics import Rig
-from impact_eval.experiments.press import TRACES, mode_controller
+from impact_eval.experiments.press import TRACES, check_robot_record, mode_controller
 
 SCENE, LOAD, TABLE, WELD = "setdown_scene.xml", "setdown_load", "setdown_table", "setdown_grasp"
 LOAD_CENTRE_IN_HAND_M, LOAD_HALF_WIDTH_M, LOAD_BELOW_TCP_M = 0.1534, 0.03, 0.11
@@ -80,17 +80,23 @@ def press_measure(force: np.ndarray, dt: float) -> tuple[float, float]:
             float(np.mean(force[-round(1.0 / dt):])))
 
 
-def setdown_rig(mode: str, load_kg: float, seed: int) -> Rig:
+def setdown_robot(overrides: Sequence[str] = ()) -> RobotOptions:
+    """The set-down's robot: the ideal one with sensor noise and a ``GRASP_FORCE_N`` grip,
+    ``FIELD=VALUE`` ``overrides`` on top (``--robot-set``, e.g. ``realism=fr3``)."""
+    return apply_robot_overrides(RobotOptions(grasp_force_n=GRASP_FORCE_N), overrides)
+
+
+def setdown_rig(mode: str, load_kg: float, seed: int, robot: RobotOptions | None = None) -> Rig:
     """The set-down scene with the load's mass set, and the mode's controller (its preset as
     shipped: ``authors_sim`` compensates gravity in the controller like every preset here, the
-    simulation has none built in, and rate-limits the command with gravity from 0 at reset)."""
+    simulation has none built in, and rate-limits the command with gravity from 0 at reset);
+    the robot is ``robot`` (default ``setdown_robot()``)."""
     ctrl_mode, cfg = mode_controller(mode)
-    sim = FrankaSim(SCENE, (LOAD,), grasp_force_n=GRASP_FORCE_N, noise=SensorNoise())
+    sim, arm, _ = build_robot(robot or setdown_robot(), SCENE, (LOAD,))
     body = sim.model.body(LOAD).id
     sim.model.body_inertia[body] *= load_kg / sim.model.body_mass[body]
     sim.model.body_mass[body] = load_kg
     mujoco.mj_setConst(sim.model, sim.data)  # the solver's inverse weights of the new mass
-    arm = PinocchioArm()
     return Rig(sim, arm, ImpactController(arm, cfg, mode=ctrl_mode), np.random.default_rng(seed))
 
 
@@ -155,10 +161,11 @@ def simulate(rig: Rig, depth_m: float, hold_s: float, carry_s: float) -> dict[st
 
 
 def setdown(mode: str, load_kg: float, depth_m: float, hold_s: float, seed: int,
-            carry_s: float = CARRY_S) -> tuple[dict, pd.DataFrame]:
+            carry_s: float = CARRY_S, robot: RobotOptions | None = None
+            ) -> tuple[dict, pd.DataFrame]:
     """One set-down: its row (``COLUMNS``, without the comparison to impedance) and its trace
     (every ``TRACE_EVERY``-th tick, with the 50 ms moving mean of the load-table force)."""
-    rig = setdown_rig(mode, load_kg, seed)
+    rig = setdown_rig(mode, load_kg, seed, robot)
     tr = simulate(rig, depth_m, hold_s, carry_s)
     dt = rig.sim.dt
     n_carry, n_arrive = round(carry_s / dt), round((carry_s + MOVE_S) / dt)
@@ -259,16 +266,20 @@ def wants_trace(traces: str, rows: list[dict], row: dict) -> bool:
 
 def run_setdown(out: Path | None, modes: Sequence[str], loads_kg: Sequence[float],
                 depths_mm: Sequence[float], hold_s: float, seed: int,
-                traces: str = "failing") -> pd.DataFrame:
+                traces: str = "failing", robot_set: Sequence[str] = ()) -> pd.DataFrame:
     """Every (load, depth, mode) set-down; with ``out``, each row is appended to
     ``out/setdown.csv`` as it finishes and rows already there are skipped (resume); the file
     is rewritten sorted, with the comparison to impedance, at the end. ``traces`` (one of
     ``TRACES``) says whose traces go to ``out/setdown_traces``: "failing" (``impact`` rows
-    above impedance + 3 N), "impact" (every ``impact`` row), "all" or "none"."""
+    above impedance + 3 N), "impact" (every ``impact`` row), "all" or "none". ``robot_set``
+    (``FIELD=VALUE``, ``setdown_robot``) is the robot, kept in ``out/robot.json``: a resume
+    with another robot is refused (no file: the ideal robot)."""
     check_choice("traces", traces, TRACES)
+    robot = setdown_robot(robot_set)
     path = None if out is None else out / "setdown.csv"
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
+        check_robot_record(out, robot_set)
     rows = [] if path is None else read_rows(path)
     done = {row_key(r) for r in rows}
     for load in loads_kg:
@@ -277,7 +288,7 @@ def run_setdown(out: Path | None, modes: Sequence[str], loads_kg: Sequence[float
                 if row_key({"mode": mode, "load_kg": load, "depth_mm": depth,
                             "hold_s": hold_s, "seed": seed}) in done:
                     continue
-                row, trace = setdown(mode, load, depth * 1e-3, hold_s, seed)
+                row, trace = setdown(mode, load, depth * 1e-3, hold_s, seed, robot=robot)
                 rows.append(row)
                 print(f"{mode:16s} {load:4.1f} kg {depth:4.0f} mm: press {row['press_n']:7.1f} N"
                       f" last 1 s {row['last_s_mean_n']:7.1f} N (m g {row['weight_n']:.1f} N)"

@@ -113,6 +113,10 @@ CASES: dict[str, tuple[str, tuple[str, ...], str]] = {
     "protocol mass above range": ("protocol", ("--masses", "2.5,99"), "out of range"),
     "protocol unknown env": ("protocol", ("--env", "IMPACT/Nope-v0"), "valid choices"),
     "protocol negative hold": ("protocol", ("--hold-s", "-1"), "hold"),
+    "protocol unknown robot field": ("protocol", ("--robot-set", "nope=1"),
+                                     "valid: FIELD=VALUE with FIELD one of"),
+    "protocol unknown realism": ("protocol", ("--robot-set", "realism=mars"),
+                                 "valid choices: ideal, fr3"),
 }
 
 

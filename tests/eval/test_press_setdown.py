@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from impact_envs.errors import InvalidArgumentError
 from impact_eval.experiments import press, press_setdown
 from impact_eval.experiments.press_setdown import moving_mean, press_measure, setdown
 
@@ -70,7 +71,7 @@ def test_table_takes_the_load_after_the_set_down(short_case: dict[str, dict]) ->
 
 def _fake_setdown(calls: list) -> object:
     def fake(mode: str, load_kg: float, depth_m: float, hold_s: float,
-             seed: int) -> tuple[dict, pd.DataFrame]:
+             seed: int, robot: object = None) -> tuple[dict, pd.DataFrame]:
         calls.append(mode)
         row = {c: 0.0 for c in press_setdown.COLUMNS}
         row.update(mode=mode, load_kg=load_kg, depth_mm=1e3 * depth_m, hold_s=hold_s,
@@ -110,6 +111,8 @@ def test_rows_append_resume_and_failing_trace(tmp_path: Path,
     (["--scenario", "setdown", "--hold-s", "1"], "valid: 2 to 60 s for the set-down"),
     (["--scenario", "wall"], "invalid choice: 'wall'"),
     (["--traces", "some"], "invalid choice: 'some'"),
+    (["--robot-set", "realism=mars"], "valid choices: ideal, fr3"),
+    (["--robot-set", "nope=1"], "valid: FIELD=VALUE with FIELD one of"),
 ])
 def test_bad_flags_are_one_line(flags: list[str], message: str,
                                 capsys: pytest.CaptureFixture[str]) -> None:
@@ -134,3 +137,32 @@ def test_other_columns_are_refused_in_one_line(tmp_path: Path,
         press.main(["--scenario", "setdown", "--out", str(tmp_path)])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and err.count("\n") == 1 and "other columns" in err
+
+
+def test_a_resume_with_another_robot_is_refused(tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    """The set-down's robot goes to ``robot.json`` and reaches every run; rows of one robot
+    are not resumed under another (a directory without the file holds the ideal robot's)."""
+    calls: list[str] = []
+    monkeypatch.setattr(press_setdown, "setdown", _fake_setdown(calls))
+    args = (["impedance"], [3.0], [15.0], 6.0, 0)
+    press_setdown.run_setdown(tmp_path, *args)
+    (tmp_path / "robot.json").unlink()  # as results/press, written before the option
+    with pytest.raises(InvalidArgumentError, match="--robot-set none .ideal., not"):
+        press_setdown.run_setdown(tmp_path, *args, robot_set=("realism=fr3",))
+    press_setdown.run_setdown(tmp_path / "fr3", *args, robot_set=("realism=fr3",))
+    with pytest.raises(InvalidArgumentError, match=r"\['realism=fr3'\], not none"):
+        press_setdown.run_setdown(tmp_path / "fr3", *args)
+    assert calls == ["impedance", "impedance"]
+
+
+def test_the_set_down_robot_takes_the_profile() -> None:
+    """Under ``realism=fr3`` the set-down's controller model is the profile's perturbed one
+    and its grip stays the set-down's 140 N; the ideal robot's model is the plant's."""
+    ideal = press_setdown.setdown_rig("impact", 3.0, 0)
+    fr3 = press_setdown.setdown_rig("impact", 3.0, 0, press_setdown.setdown_robot(["realism=fr3"]))
+    q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    for rig in (ideal, fr3):
+        rig.arm.update(q, np.zeros(7))
+    assert not np.allclose(ideal.arm.gravity, fr3.arm.gravity, atol=1e-3)
+    assert press_setdown.setdown_robot(["realism=fr3"]).grasp_force_n == press_setdown.GRASP_FORCE_N

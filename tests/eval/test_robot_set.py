@@ -1,0 +1,82 @@
+"""``impact-eval --robot-set FIELD=VALUE`` and ``evaluate(robot_set=...)``: the robot every
+method's env gets, recorded in run.json, checked on resume, refused in one line when bad."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from fixtures.eval_fake import ENV_ID, FakePolicy
+
+from impact_envs.errors import InvalidArgumentError
+from impact_eval.api import evaluate
+from impact_eval.cli import main
+from impact_eval.reproduce_manifest import sweep_argv
+
+
+def _args(out: Path, *extra: str) -> list[str]:
+    return ["--env", ENV_ID, "--method", "fake_fast", "--masses", "0.5,2", "--episodes", "2",
+            "--envs-per-worker", "2", "--workers", "1", "--out", str(out), *extra]
+
+
+def _exit_code(argv: list[str]) -> int:
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return int(exc.code)
+
+
+def test_the_robot_reaches_every_row_and_run_json(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "run"
+    assert main(_args(out, "--robot-set", "realism=fr3", "--robot-set", "delay_ticks=0")) == 0
+    rows = pd.read_csv(out / "episodes.csv")
+    assert set(rows["robot_profile"]) == {"fr3"} and len(rows) == 4
+    args = json.loads((out / "run.json").read_text())["args"]
+    assert args["robot_overrides"] == ["realism=fr3", "delay_ticks=0"]
+    assert sweep_argv(args)[-4:] == ["--robot-set", "realism=fr3", "--robot-set",
+                                     "delay_ticks=0"]  # what reproduce reruns
+    assert main(_args(out, "--robot-set", "realism=fr3", "--robot-set", "delay_ticks=0",
+                      "--resume")) == 0
+    capsys.readouterr()
+    assert _exit_code(_args(out, "--robot-set", "realism=fr3", "--resume")) == 2
+    assert "cannot resume: robot_overrides was ['realism=fr3', 'delay_ticks=0']" in \
+        capsys.readouterr().err
+
+
+def test_a_run_from_before_the_option_resumes_only_on_the_ideal_robot(tmp_path: Path,
+                                                                    capsys) -> None:
+    out = tmp_path / "old"
+    assert main(_args(out)) == 0
+    identity = out / "identity.json"
+    recorded = json.loads(identity.read_text())
+    del recorded["robot_overrides"]  # as written before --robot-set existed
+    identity.write_text(json.dumps(recorded))
+    assert main(_args(out, "--resume")) == 0
+    capsys.readouterr()
+    assert _exit_code(_args(out, "--robot-set", "realism=fr3", "--resume")) == 2
+    assert "cannot resume: robot_overrides was []" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("setting", "message"), [
+    ("realism=real", "invalid realism 'real'; valid choices: ideal, fr3"),
+    ("delay=1", "invalid --robot-set 'delay=1'; valid: FIELD=VALUE with FIELD one of"),
+    ("delay_ticks=3", "invalid delay_ticks 3; valid: an integer from 0 to 1"),
+    ("sensor_noise=yes", "invalid --robot-set sensor_noise='yes'; valid: true or false"),
+])
+def test_a_bad_robot_setting_is_one_line_and_writes_nothing(tmp_path: Path, capsys, setting,
+                                                            message) -> None:
+    assert _exit_code(_args(tmp_path / "out", "--robot-set", setting)) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.strip().count("\n") == 0
+    assert not (tmp_path / "out").exists()
+
+
+def test_evaluate_takes_the_same_settings(tmp_path: Path) -> None:
+    rows = evaluate(lambda _id, _env: FakePolicy(0.9), ENV_ID, [0.5], tmp_path / "api",
+                    episodes=2, controller="impedance", robot_set=["realism=fr3"])
+    assert set(rows["robot_profile"]) == {"fr3"}
+    with pytest.raises(InvalidArgumentError, match="valid: a list of 'FIELD=VALUE' strings"):
+        evaluate(lambda _id, _env: FakePolicy(0.9), ENV_ID, [0.5], tmp_path / "x",
+                 robot_set="realism=fr3")
