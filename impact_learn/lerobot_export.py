@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -38,6 +39,10 @@ VIDEO_PATH = f"videos/{{video_key}}/{CHUNK_FILE}.mp4"
 EPISODES_PATH = f"meta/episodes/{CHUNK_FILE}.parquet"
 ACTION_NAMES = ["x", "y", "z", *(f"rot6d_{i}" for i in range(6)), "gripper"]
 INDEX_FEATURES = ("timestamp", "frame_index", "episode_index", "index", "task_index")
+STATE_FEATURE = "observation.state"
+ENV_STATE_FEATURE = "observation.environment_state"
+IMAGE_FEATURE_PREFIX = "observation.images."
+"""A camera's feature is this prefix and the camera name (``observation.images.wrist``)."""
 
 
 @dataclass(frozen=True)
@@ -82,10 +87,30 @@ class Layout:
     cameras: dict[str, str]
     skipped: tuple[str, ...]
 
+    def vectors(self) -> tuple[tuple[str, tuple[str, ...]], ...]:
+        """``(feature, keys)`` of the vector features that have entries, in feature order
+        (``observation.state``, then ``observation.environment_state``)."""
+        pairs = ((STATE_FEATURE, self.state_keys), (ENV_STATE_FEATURE, self.env_keys))
+        return tuple((name, keys) for name, keys in pairs if keys)
 
-def env_entries(env_id: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """The env's state observation entries in its order, and the task's privileged ones
-    (both empty when ``env_id`` cannot be made)."""
+
+@dataclass(frozen=True)
+class EnvEntries:
+    """An env's state observation entries (all empty when the env cannot be made).
+
+    Attributes:
+        order: Entry names in the env's observation order.
+        sizes: Values per entry.
+        hidden: The task's privileged entries (``Task.privileged_observations``).
+    """
+
+    order: tuple[str, ...]
+    sizes: dict[str, int]
+    hidden: tuple[str, ...]
+
+
+def env_entries(env_id: str) -> EnvEntries:
+    """The state observation entries of ``env_id`` (made once, in ``"state"`` mode)."""
     import gymnasium as gym
 
     from impact_envs.envs.pixels import privileged_keys
@@ -93,47 +118,55 @@ def env_entries(env_id: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
     try:
         env = gym.make(env_id)
     except gym.error.Error:
-        return (), ()
+        return EnvEntries((), {}, ())
     try:
         task = getattr(env.unwrapped, "task", None)
         hidden = privileged_keys(task) if task is not None else ()
-        return tuple(env.observation_space.spaces), hidden
+        spaces = env.observation_space.spaces
+        return EnvEntries(tuple(spaces), {k: int(s.shape[0]) for k, s in spaces.items()},
+                          hidden)
     finally:
         env.close()
 
 
-def plan_layout(data: zarr.Group, env_id: str) -> Layout:
-    """The ``Layout`` of a store's ``data`` group; vectors in the env's observation order
-    (then by name: zarr lists arrays in no fixed order), cameras by name."""
-    order, hidden = env_entries(env_id)
+def layout_of(frame_ranks: Mapping[str, int], order: Sequence[str],
+              hidden: Collection[str]) -> Layout:
+    """The ``Layout`` of observation entries with ``frame_ranks`` (dimensions of one frame:
+    1 for a vector, 3 for an image); vectors in ``order`` (then by name), cameras
+    (``<camera>_rgb``) by name, other images skipped, ``hidden`` vectors as environment
+    state."""
     rank = {k: i for i, k in enumerate(order)}
-    keys = sorted((k for k, _ in data.arrays()), key=lambda k: (rank.get(k, len(rank)), k))
+    keys = sorted(frame_ranks, key=lambda k: (rank.get(k, len(rank)), k))
     state, env, cameras, skipped = [], [], {}, []
     for key in keys:
-        arr = data[key]
-        if key == ACTION_KEY:
-            continue
-        if arr.ndim == 4 and key.endswith("_rgb"):
-            cameras[f"observation.images.{key[:-4]}"] = key
-        elif arr.ndim == 4:
+        if frame_ranks[key] == 3 and key.endswith("_rgb"):
+            cameras[f"{IMAGE_FEATURE_PREFIX}{key[:-4]}"] = key
+        elif frame_ranks[key] == 3:
             skipped.append(key)
         else:
             (env if key in hidden else state).append(key)
     return Layout(tuple(state), tuple(env), cameras, tuple(skipped))
 
 
-def _names(data: zarr.Group, keys: tuple[str, ...]) -> list[str]:
-    return [f"{k}.{i}" for k in keys for i in range(data[k].shape[1])]
+def plan_layout(data: zarr.Group, env_id: str) -> Layout:
+    """The ``Layout`` of a store's ``data`` group; vectors in the env's observation order
+    (then by name: zarr lists arrays in no fixed order), cameras by name."""
+    entries = env_entries(env_id)
+    ranks = {k: arr.ndim - 1 for k, arr in data.arrays() if k != ACTION_KEY}
+    return layout_of(ranks, entries.order, entries.hidden)
+
+
+def entry_names(sizes: Mapping[str, int], keys: Sequence[str]) -> list[str]:
+    """Names of the values of ``keys`` concatenated: ``ee_pos.0``, ``ee_pos.1``, ..."""
+    return [f"{k}.{i}" for k in keys for i in range(sizes[k])]
 
 
 def features(data: zarr.Group, layout: Layout, video: VideoOptions) -> dict[str, Any]:
     """``info.json``'s ``features``: vectors, cameras, the action and the index columns."""
     feats: dict[str, Any] = {}
-    for name, keys in (("observation.state", layout.state_keys),
-                       ("observation.environment_state", layout.env_keys)):
-        if keys:
-            names = _names(data, keys)
-            feats[name] = {"dtype": "float32", "shape": [len(names)], "names": names}
+    for name, keys in layout.vectors():
+        names = entry_names({k: data[k].shape[1] for k in keys}, keys)
+        feats[name] = {"dtype": "float32", "shape": [len(names)], "names": names}
     for name, key in layout.cameras.items():
         h, w, c = data[key].shape[1:]
         feats[name] = {"dtype": "video", "shape": [h, w, c],

@@ -46,10 +46,8 @@ def _frame_columns(root: zarr.Group, layout: Layout, ends: np.ndarray,
     episode = np.repeat(np.arange(len(ends)), ends - starts)
     frame = np.arange(n) - starts[episode]
     cols: dict[str, np.ndarray] = {}
-    for name, keys in (("observation.state", layout.state_keys),
-                       ("observation.environment_state", layout.env_keys)):
-        if keys:
-            cols[name] = np.concatenate([data[k][:n] for k in keys], 1).astype(np.float32)
+    for name, keys in layout.vectors():
+        cols[name] = np.concatenate([data[k][:n] for k in keys], 1).astype(np.float32)
     cols["action"] = np.asarray(data[ACTION_KEY][:n], dtype=np.float32)
     cols["timestamp"] = (frame / fps).astype(np.float32)
     cols["frame_index"], cols["episode_index"] = frame.astype(np.int64), episode.astype(np.int64)

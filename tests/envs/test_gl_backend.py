@@ -69,6 +69,7 @@ GL_OF_MUJOCO = ("import os, sys, mujoco; "
 @pytest.mark.parametrize("package", [
     "impact_eval.bench",  # imports mujoco at its top, before any impact_envs import
     pytest.param("impact_learn", marks=pytest.mark.slow),
+    pytest.param("impact_lerobot", marks=pytest.mark.slow),
     pytest.param("impact_robosuite", marks=pytest.mark.slow),
 ])
 def test_a_package_picks_egl_before_mujoco_loads(package: str) -> None:

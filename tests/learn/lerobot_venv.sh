@@ -26,3 +26,9 @@ python3 -m venv "$VENV"
 # lerobot.policies (the round trip) also imports diffusers and pyserial; then this package
 "$VENV/bin/pip" install -q "diffusers>=0.30,<0.50" pyserial
 "$VENV/bin/pip" install -q -e "$(cd "$(dirname "$0")/../.." && pwd)"
+# LeRobot's commands (lerobot-eval with the impact_lerobot plugin) import torchvision before
+# any plugin loads: a startup hook declares the two op schemas at that import
+# (tests/learn/lerobot_torchvision_hook.py; docs/lerobot.md)
+SITE=$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+cp "$(dirname "$0")/lerobot_torchvision_hook.py" "$SITE/impact_torchvision_hook.py"
+echo "import impact_torchvision_hook" > "$SITE/impact_torchvision_hook.pth"
