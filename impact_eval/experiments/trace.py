@@ -12,6 +12,7 @@ act) and the largest robot-table contact force of the step (``hand_n`` [N]). The
 counts, per joint, the policy steps whose final torque sat at the FR3 limit (87 / 12 Nm).
 The traces quoted in docs/results.md come from this command. Calligraphy adds the writing
 summary (force in band, stroke RMS) on the last line.
+``--robot-set FIELD=VALUE`` changes the robot as in impact-eval (e.g. ``realism=fr3``).
 ``--no-joint-friction`` zeroes the arm joints' Coulomb friction in the simulated plant (an
 ablation of the robot, not of the controller), to see what the friction dead-band costs.
 """
@@ -33,11 +34,13 @@ HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate  rel_s 
 
 
 def trace(env_id: str, method: str, value: float, seed: int, every: int,
-          overrides: Sequence[str] = (), joint_friction: bool = True) -> list[str]:
+          overrides: Sequence[str] = (), joint_friction: bool = True,
+          robot_overrides: Sequence[str] = ()) -> list[str]:
     """Run one episode (until success or the step limit); return the printed lines."""
     spec = resolve_method(method)
     env = make_env(check_env_id(env_id), spec.controller, overrides, spec.preset,
-                   robot=spec.robot)  # impact_authors: the commanded torque reading
+                   robot=spec.robot,  # impact_authors: the commanded torque reading
+                   robot_overrides=robot_overrides)
     limit = np.asarray(env.unwrapped.controller.config.limits.torque_max_nm)
     saturated = np.zeros(len(limit), dtype=int)
     release = env.unwrapped.controller.optional.saturation_release
@@ -86,12 +89,15 @@ def main(argv: list[str] | None = None) -> None:
                         metavar="SECTION.FIELD=VALUE", help="as impact-eval --controller-set")
     parser.add_argument("--no-joint-friction", action="store_true",
                         help="zero the arm joints' Coulomb friction in the simulated plant")
+    parser.add_argument("--robot-set", action="append", default=[], metavar="FIELD=VALUE",
+                        help="as impact-eval --robot-set, e.g. realism=fr3")
     args = parser.parse_args(argv)
     if args.every < 1:
         parser.error(f"invalid --every {args.every}; valid: >= 1")
     try:
         lines = trace(args.env, args.method, args.value, args.seed, args.every,
-                      args.controller_set, joint_friction=not args.no_joint_friction)
+                      args.controller_set, joint_friction=not args.no_joint_friction,
+                      robot_overrides=args.robot_set)
     except ImpactError as exc:  # unknown env / method, bad value, missing checkpoint
         print(f"{parser.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise SystemExit(2) from None
