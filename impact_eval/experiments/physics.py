@@ -126,13 +126,16 @@ def noise_floor(n_poses: int = 5, seed: int = 0, measure_s: float = 3.0,
         target_pos, target_quat = rig.start(solve_ik(rig.arm, pos, rot))
         rig.run(target_pos, target_quat, 1.0)
         sig = rig.controller.signals
+        pose_raw, pose_slow = [], []
         for _ in range(round(measure_s / rig.sim.dt)):
             control_tick(rig.sim, rig.controller, rig.rng, target_pos, target_quat, -1.0)
-            raw.append(sig.wrench_ext_world[:3].copy())
-            slow.append(sig.wrench_slow_world[:3].copy())
-    raw_a, slow_a = np.array(raw), np.array(slow)
-    raw_a -= raw_a.mean(axis=0)  # the pose-dependent bias of the model is not noise
-    slow_a -= slow_a.mean(axis=0)
+            pose_raw.append(sig.wrench_ext_world[:3].copy())
+            pose_slow.append(sig.wrench_slow_world[:3].copy())
+        # each pose's own mean removed: its bias (the model's, a profile's sensor offsets at
+        # that pose) is not noise
+        raw.append(np.array(pose_raw) - np.mean(pose_raw, axis=0))
+        slow.append(np.array(pose_slow) - np.mean(pose_slow, axis=0))
+    raw_a, slow_a = np.concatenate(raw), np.concatenate(slow)
     return {"raw_std_n": float(raw_a.std(axis=0).max()),
             "raw_max_norm_n": float(np.linalg.norm(raw_a, axis=1).max()),
             "slow_std_n": float(slow_a.std(axis=0).max()),

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from impact_eval.experiments.physics import payload_hold, wrench_recovery
+from impact_eval.experiments.physics import noise_floor, payload_hold, wrench_recovery
 
 
 @pytest.mark.parametrize("estimator", ["residual", "momentum"])
@@ -26,3 +26,14 @@ def test_payload_sag_impedance_vs_impact():
     assert ff["settle_3mm_s"] < 4.5
     # the full error also holds the Coulomb-friction dead-band (a few mm), never the load
     assert ff["final_error_m"] < 0.015
+
+
+def test_noise_floor_removes_each_pose_s_bias():
+    """Under ``realism="fr3"`` each pose carries its own ~1 N offset (docs/sensing.md); the
+    noise floor removes each pose's mean, so what is left is the sensors' white noise and the
+    drift, not the offsets' spread between poses (1.27 N when one mean was removed)."""
+    from impact_envs.envs.options import RobotOptions
+
+    floor = noise_floor(n_poses=2, seed=5, measure_s=0.5, robot=RobotOptions(realism="fr3"))
+    assert 0.0 < floor["raw_std_n"] < 0.3
+    assert floor["slow_std_n"] < floor["raw_std_n"]
