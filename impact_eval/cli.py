@@ -13,6 +13,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from impact_envs.cli import add_robot_set
 from impact_envs.errors import ImpactError, InvalidArgumentError
 
 PROG = "impact-eval"
@@ -128,15 +129,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         "('default', or 'paper' for *_paper methods; repeatable; ablations), e.g. "
         "internal_model.slow_rate_max=1.5; recorded in run.json",
     )
-    p.add_argument(
-        "--robot-set",
-        action="append",
-        default=[],
-        metavar="FIELD=VALUE",
-        help="change one field of the simulated robot (RobotOptions) for every method "
-        "(repeatable), e.g. realism=fr3 (docs/sensing.md, 'Realism profiles') or "
-        "delay_ticks=0; recorded in run.json and checked on --resume",
-    )
+    add_robot_set(p, "run.json, checked on --resume; for every method")
     p.add_argument(
         "--resume",
         action="store_true",

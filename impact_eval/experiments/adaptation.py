@@ -50,7 +50,7 @@ import numpy as np
 import pandas as pd
 
 import impact_envs
-from impact_envs.cli import OneLineParser
+from impact_envs.cli import OneLineParser, add_robot_set
 from impact_envs.envs.options import RobotOptions, apply_robot_overrides
 from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.experts import make_expert
@@ -284,9 +284,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="hold the object still above the goal this long before lowering [s]")
     parser.add_argument("--repeats", type=int, default=1,
                         help=f"sequences, base seeds seed + {REPEAT_SEED_STRIDE} k")
-    parser.add_argument("--robot-set", action="append", default=[], metavar="FIELD=VALUE",
-                        help="the robot, as impact-eval --robot-set, e.g. realism=fr3 "
-                             "(kept in OUT/robot.json)")
+    add_robot_set(parser, "OUT/robot.json")
     parser.add_argument("--out", type=Path, default=Path("results/protocol"))
     args = parser.parse_args(argv)
     try:

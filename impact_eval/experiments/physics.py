@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from impact_envs.cli import add_robot_set
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.lie import matrix_to_quat, so3_exp
 from impact_envs.control.presets import preset_config
@@ -181,8 +182,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=5)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--robot-set", action="append", default=[], metavar="FIELD=VALUE",
-                        help="as impact-eval --robot-set, e.g. realism=fr3")
+    add_robot_set(parser)
     args = parser.parse_args(argv)
     robot = apply_robot_overrides(None, args.robot_set)
     print(f"robot: {robot.resolved_realism()}\n")

@@ -35,7 +35,7 @@ import mujoco
 import numpy as np
 import pandas as pd
 
-from impact_envs.cli import OneLineParser
+from impact_envs.cli import OneLineParser, add_robot_set
 from impact_envs.control.config import ControllerConfig
 from impact_envs.control.controller import ImpactController
 from impact_envs.control.presets import preset_config
@@ -154,8 +154,7 @@ def _parser() -> OneLineParser:
                         help="set-down traces written to OUT/setdown_traces: failing (impact "
                              "above impedance + 3 N), impact, all, none")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--robot-set", action="append", default=[], metavar="FIELD=VALUE",
-                        help="the robot, as impact-eval --robot-set, e.g. realism=fr3")
+    add_robot_set(parser, "OUT/robot.json")
     parser.add_argument("--out", type=Path, default=None)
     return parser
 

@@ -25,6 +25,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from impact_envs.cli import add_robot_set
 from impact_envs.errors import ImpactError
 from impact_envs.policies.interface import stack_obs
 from impact_eval.envs import check_env_id, describe_env, make_env
@@ -89,8 +90,7 @@ def main(argv: list[str] | None = None) -> None:
                         metavar="SECTION.FIELD=VALUE", help="as impact-eval --controller-set")
     parser.add_argument("--no-joint-friction", action="store_true",
                         help="zero the arm joints' Coulomb friction in the simulated plant")
-    parser.add_argument("--robot-set", action="append", default=[], metavar="FIELD=VALUE",
-                        help="as impact-eval --robot-set, e.g. realism=fr3")
+    add_robot_set(parser)
     args = parser.parse_args(argv)
     if args.every < 1:
         parser.error(f"invalid --every {args.every}; valid: >= 1")
