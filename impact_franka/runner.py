@@ -105,6 +105,11 @@ class LoopReport:
         command_success_rate_min: Lowest ``control_command_success_rate`` the robot reported
             after ``SUCCESS_RATE_AFTER_S`` (the share of its last 100 cycles whose command
             arrived in time).
+        lost_in_a_row_max: Longest run of robot cycles the loop did not answer, from the
+            robot's clock (``RobotState.time`` advances 1 ms per cycle; a gap of k ms between
+            two states read is k - 1 cycles unanswered). The robot aborts the motion with
+            ``communication_constraints_violation`` at 20 in a row (libfranka's
+            docs/network_requirements.rst), whatever the success rate.
         ticks_table: One row per tick, ``TICK_COLUMNS``.
     """
 
@@ -121,6 +126,7 @@ class LoopReport:
     stop_reason: str = ""
     robot_message: str = ""
     command_success_rate_min: float = math.nan
+    lost_in_a_row_max: int = 0
     ticks_table: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=TICK_COLUMNS))
 
     @property
@@ -239,7 +245,7 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
     _precompile(controller, first.q, first.tau_measured, pos, quat)
     rows: list[tuple] = []
     sent, reason, end, strikes, held, message = np.zeros(7), "", None, 0, 0, ""
-    success, robot_t0, gripper = 1.0, None, 1.0
+    success, robot_t0, gripper, previous_t, lost = 1.0, None, 1.0, None, 0
     controller.set_gripper_command(gripper)
     source.start(pos, quat, arm)
     _pause_gc()
@@ -251,6 +257,9 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
                 state, _ = active.readOnce()
                 robot_t = state.time.to_sec()  # the robot's clock: 1 ms per cycle
                 robot_t0 = robot_t if robot_t0 is None else robot_t0
+                if previous_t is not None:
+                    lost = max(lost, round((robot_t - previous_t) * 1e3) - 1)
+                previous_t = robot_t
                 now = robot_t - robot_t0
                 r = reading(state)
                 t0 = time.perf_counter_ns()
@@ -290,7 +299,8 @@ def run_loop(robot: object, controller: ImpactController, seconds: float,
         source.close()
     report = _report(pd.DataFrame(rows, columns=TICK_COLUMNS), time.perf_counter() - start,
                      float(np.linalg.norm(pos - first.pos_ee)), robot, reason, held)
-    return replace(report, robot_message=message, command_success_rate_min=success)
+    return replace(report, robot_message=message, command_success_rate_min=success,
+                   lost_in_a_row_max=lost)
 
 
 def _pause_gc() -> None:

@@ -28,7 +28,8 @@ def print_report(report: object) -> None:
           f"{1e3 * r.pos_error_after_ramp_m:.2f} mm; our TCP vs O_T_EE "
           f"{1e3 * r.tcp_vs_robot_m:.2f} mm")
     print(f"  robot errors: {r.robot_errors or 'none'}; command success rate, lowest "
-          f"{r.command_success_rate_min:.3f}")
+          f"{r.command_success_rate_min:.3f}; cycles unanswered in a row, most "
+          f"{r.lost_in_a_row_max} (the robot aborts at 20)")
 
 
 def make_controller(args: argparse.Namespace, robot: object) -> tuple[object, dict]:

@@ -30,6 +30,19 @@ SIM_BUDGET = ["--budget-ms", f"{SIM_BUDGET_MS:g}"]
 """``SIM_BUDGET_MS`` as ``impact-robot`` arguments."""
 
 
+def assert_no_abort_by_the_robot_s_rule(report: dict) -> None:
+    """The robot's rule for lost commands, checked from both sides on a run under franka-sim
+    (which enforces it): it aborts the motion with ``communication_constraints_violation`` at
+    20 cycles unanswered in a row (libfranka's docs/network_requirements.rst), not at any
+    success rate. Our count from the robot's clock must agree with the simulator's verdict.
+    The success rate itself depends on this host's load (0.95-0.99 idle; 0.88 and 0.77 on CI's
+    2 shared cores, with single 3-12 ms stalls of the loop thread), so only its range is
+    checked."""
+    assert report["robot_errors"] == ""
+    assert 0 <= report["lost_in_a_row_max"] < 20
+    assert 0.0 < report["command_success_rate_min"] <= 1.0
+
+
 FORCE_AFTER_S = 5.0
 """When the scene's force arrives [s on the robot's clock after the torque loop starts]."""
 
