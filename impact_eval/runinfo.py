@@ -219,12 +219,24 @@ def check_resumable(recorded: dict | None, now: RunIdentity, extend: bool = Fals
             f"value (every cell keeps one episode count) or another --out{hint}")
 
 
+def _with_later_robot_fields(setting: object) -> object:
+    """A recorded method setting whose ``robot`` lacks fields added to ``RobotOptions`` since
+    (issue 39's realism fields), completed with their defaults: a default reproduces the
+    behaviour from before the field existed (``realism="ideal"`` bit for bit), so a run
+    started before then resumes."""
+    if not isinstance(setting, dict) or not isinstance(setting.get("robot"), dict):
+        return setting
+    from impact_envs.envs.options import RobotOptions
+
+    return {**setting, "robot": {**asdict(RobotOptions()), **setting["robot"]}}
+
+
 def _check_controllers(was: object, now: dict[str, dict[str, object]]) -> None:
     """Each method present in both must run the same controller, preset and warm start."""
     if not isinstance(was, dict):
         return
     for method, setting in now.items():
-        before = was.get(method)
+        before = _with_later_robot_fields(was.get(method))
         if before is not None and before != setting:
             raise InvalidArgumentError(
                 f"cannot resume: method {method!r} ran with {before} and would now run with "

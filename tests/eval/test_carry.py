@@ -144,6 +144,38 @@ def test_a_resume_that_changes_the_carry_is_refused(reference: Path, tmp_path: P
     assert (out / "episodes.csv").read_bytes() == before
 
 
+LATER_ROBOT_FIELDS = ("realism", "tau_offset_std_nm", "tau_offset_drift_nm_per_sqrt_s",
+                      "model_link_mass_std", "model_com_std_m", "model_inertia_std",
+                      "model_seed", "delay_ticks", "command_loss_rate", "encoder_step_rad")
+"""The robot fields issue 39 added: a run recorded before them has none of them."""
+
+
+def test_a_run_recorded_before_the_realism_fields_resumes(reference: Path, tmp_path: Path,
+                                                         capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "cut"
+    _interrupted(reference, out, {0})
+    for name in ("identity.json", "run.json"):
+        record = json.loads((out / name).read_text())
+        settings = record.get("method_controllers") or record["args"]["method_controllers"]
+        for field in LATER_ROBOT_FIELDS:
+            del settings[CARRIED]["robot"][field]
+        (out / name).write_text(json.dumps(record))
+    assert main(_args(out, "--workers", "1", "--resume")) == 0, capsys.readouterr().err
+    assert (out / "episodes.csv").read_bytes() == reference.read_bytes()
+
+
+def test_a_resume_under_another_realism_is_refused(reference: Path, tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "cut"
+    _interrupted(reference, out, {0})
+    identity = json.loads((out / "identity.json").read_text())
+    identity["method_controllers"][CARRIED]["robot"]["realism"] = "fr3"
+    (out / "identity.json").write_text(json.dumps(identity))
+    assert main(_args(out, "--workers", "1", "--resume")) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"cannot resume: method {CARRIED!r}" in err
+
+
 def _config(methods: tuple[str, ...], episodes: int = 4) -> SweepConfig:
     return SweepConfig(env_id=ENV_ID, canonical_env_id=BARE_ID, param_name="object_mass",
                        policy_dt=1 / 30, methods=methods, values=(0.5, 2.5), episodes=episodes,
