@@ -81,7 +81,14 @@ def make_lerobot_policy(dataset: Path, args: argparse.Namespace):
     features = dataset_to_policy_features(meta.features)
     outputs = {k: f for k, f in features.items() if f.type is FeatureType.ACTION}
     inputs = {k: f for k, f in features.items() if k not in outputs}
+    from lerobot.configs.types import NormalizationMode
+
+    mapping = {"VISUAL": NormalizationMode.MEAN_STD, "STATE": NormalizationMode.MIN_MAX,
+               "ACTION": NormalizationMode.MIN_MAX}
+    if args.env_state_norm == "min_max":  # LeRobot's default mapping has no "ENV" entry
+        mapping["ENV"] = NormalizationMode.MIN_MAX
     cfg = DiffusionConfig(input_features=inputs, output_features=outputs, device="cpu",
+                          normalization_mapping=mapping,
                           n_obs_steps=2, horizon=16, n_action_steps=8,
                           down_dims=(64, 128, 256), noise_scheduler_type="DDIM",
                           num_inference_steps=10)
@@ -171,6 +178,9 @@ def main(argv: list[str] | None = None) -> None:
                         help="kg, comma-separated")
     parser.add_argument("--episodes", type=int, default=10, help="per mass and controller")
     parser.add_argument("--seed", type=int, default=0, help="training seed")
+    parser.add_argument("--env-state-norm", choices=("identity", "min_max"), default="identity",
+                        help="normalization of observation.environment_state (the object's "
+                             "pose): identity is LeRobot 0.4.4's default for its ENV type")
     args = parser.parse_args(argv)
     define_missing_torchvision_ops()
     out = Path(args.out)
