@@ -20,6 +20,8 @@ machinery tested) without the scripted experts, diffusion policies or Stable-Bas
 | `scripted_impact_paper` | scripted expert                    | `impact`, preset `paper` |
 | `impact_authors`  | DP checkpoint `<env>/vanilla`    | `impact`, `authors_sim`, carried (1) |
 | `scripted_impact_authors` | scripted expert          | `impact`, `authors_sim`, carried (1) |
+| `lerobot_dp`      | LeRobot DP checkpoint `<env>/lerobot_dp` (needs lerobot) | `impedance` |
+| `lerobot_dp_impact` | the same checkpoint                    | `impact`    |
 | `sb3:<path.zip>`  | any SB3 algorithm's policy, deterministic (``sb3.py``) | `impact` |
 | `sb3_impedance:<path.zip>` | the same | `impedance` |
 
@@ -227,6 +229,18 @@ def _dp_factory(variant: str) -> PolicyFactory:
     return build
 
 
+def _lerobot_factory(variant: str) -> PolicyFactory:
+    """Factory loading the env's ``variant`` LeRobot checkpoint (``lerobot-train``'s
+    ``pretrained_model``) behind our protocol; a one-line CheckpointError without LeRobot."""
+
+    def build(env_id: str, env: gym.Env) -> Policy:  # noqa: ARG001 - the factory signature
+        from impact_lerobot.policy import load_lerobot_policy
+
+        return load_lerobot_policy(checkpoint_dir(env_id, variant), env_id)
+
+    return build
+
+
 def _build_impact_dp(env_id: str, env: gym.Env) -> Policy:
     """The env's ``impact`` checkpoint (demos recorded under the IMPACT controller at the
     nominal mass) where one ships, else its ``vanilla`` checkpoint."""
@@ -273,6 +287,10 @@ for _spec in (
     MethodSpec("scripted_impact_authors", "impact", _build_scripted,
                "scripted expert + the authors' IMPACT controller as their simulation runs it",
                preset="authors_sim", robot=AUTHORS_ROBOT, carry=True),
+    MethodSpec("lerobot_dp", "impedance", _lerobot_factory("lerobot_dp"),
+               "LeRobot's Diffusion Policy (trained by lerobot-train on our export), impedance"),
+    MethodSpec("lerobot_dp_impact", "impact", _lerobot_factory("lerobot_dp"),
+               "LeRobot's Diffusion Policy + IMPACT controller"),
     MethodSpec("vanilla_dp_rgb", "impedance", _dp_factory("vanilla_rgb"),
                "visuomotor Vanilla DP (cameras + the robot's own state), impedance",
                observation=RGB_OBSERVATION),

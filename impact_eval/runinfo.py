@@ -27,8 +27,10 @@ PACKAGES = (
     "stable-baselines3",
     "pandas",
     "matplotlib",
+    "lerobot",
 )
-"""Distributions whose versions are recorded."""
+"""Distributions whose versions are recorded (``lerobot``: the ``lerobot_*`` methods' library,
+``None`` where it is not installed)."""
 
 
 def package_versions() -> dict[str, str | None]:

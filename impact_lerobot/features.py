@@ -96,6 +96,18 @@ class ObservationPlan:
             out[PIXELS] = {camera: obs[key] for camera, key in self.cameras().items()}
         return out
 
+    def policy_batch(self, obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """A batch of our observation dicts (``{key: (B, ...)}``) as the policy's features,
+        as LeRobot's ``preprocess_observation`` makes them from ``convert``'s output: float32
+        vectors ``(B, d)``, images float32 ``(B, 3, H, W)`` in [0, 1]."""
+        out = {name: np.concatenate([np.asarray(obs[k]).reshape(len(obs[k]), -1) for k in keys],
+                                    axis=1).astype(np.float32)
+               for name, keys in self.layout.vectors()}
+        for name, key in self.layout.cameras.items():
+            out[name] = np.ascontiguousarray(
+                np.asarray(obs[key]).transpose(0, 3, 1, 2).astype(np.float32) / 255.0)
+        return out
+
     def space(self, ours: spaces.Dict) -> spaces.Dict:
         """LeRobot's observation space from our env's (``ours``): vector bounds concatenated."""
         self.check(ours)

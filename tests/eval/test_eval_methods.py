@@ -151,14 +151,17 @@ SHIPPED = sorted((p.parent.name, p.name) for p in
 
 
 VARIANT_METHOD = {"vanilla": "vanilla_dp", "augmented": "augmented_dp", "impact": "impact",
-                  "vanilla_rgb": "vanilla_dp_rgb"}
-"""The method that loads each checkpoint variant."""
+                  "vanilla_rgb": "vanilla_dp_rgb", "lerobot_dp": "lerobot_dp"}
+"""The method that loads each checkpoint variant (``lerobot_dp`` needs LeRobot: checked in its
+venv, tests/lerobot_plugin/test_plugin_policy.py without it)."""
 
 
 @pytest.mark.parametrize("env_name, variant", SHIPPED)
 def test_shipped_checkpoint_loads_and_acts_in_its_env(env_name: str, variant: str,
                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     """Every shipped checkpoint loads without pickle and emits in-space actions for its env."""
+    if variant == "lerobot_dp":
+        pytest.importorskip("lerobot", reason="LeRobot's checkpoint needs lerobot")
     import impact_envs
     from impact_envs.policies.interface import stack_obs
     from impact_eval.envs import method_env
