@@ -122,7 +122,7 @@ def main(argv: list[str] | None = None) -> None:
         where = out / f"eval_{label}"
         table = impact_eval.evaluate(load(run), ENV_ID, args.masses, where,
                                      episodes=args.episodes, controller=controller,
-                                     controller_preset=preset, name=f"lerobot_dp_{label}",
+                                     controller_preset=preset, name=f"round_trip_{label}",
                                      envs_per_worker=args.episodes,
                                      resume=(where / "episodes.csv").exists())
         rates = table.groupby("param_value")["success"].agg(["sum", "count"])

@@ -37,7 +37,7 @@ def test_round_trip_trains_in_lerobot_and_evaluates_here(tmp_path) -> None:
     assert "imitation: action position error on demo frames" in run.stdout
     for label in ("impedance", "impact", "impact_paper"):
         table = pd.read_csv(out / f"eval_{label}" / "episodes.csv", keep_default_na=False)
-        assert len(table) == 2 and set(table["method"]) == {f"lerobot_dp_{label}"}
+        assert len(table) == 2 and set(table["method"]) == {f"round_trip_{label}"}
         # the policy acted for whole episodes: no crash recorded as a failure reason
         assert not table["failure_reason"].str.startswith(("exception", "unstable")).any()
         assert (table["length"] > 0).all()
