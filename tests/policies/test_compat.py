@@ -19,7 +19,10 @@ from impact_envs.policies.diffusion.policy import DiffusionPolicy
 from impact_eval.methods import env_short_name
 
 ROOT = Path(impact_envs.__file__).parent / "checkpoints"
-SHIPPED = sorted(p.parent for p in ROOT.glob("*/*/model.safetensors"))
+SHIPPED = sorted(p.parent for p in ROOT.glob("*/*/model.safetensors")
+                 if not (p.parent / "policy_preprocessor.json").exists())
+"""Our diffusion-policy checkpoints; LeRobot's (``hammer/lerobot_dp``, its processors' files
+beside the model) load through ``impact_lerobot.policy``: tests/eval/test_eval_methods.py."""
 
 
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: f"{p.parent.name}/{p.name}")
