@@ -13,7 +13,7 @@ from diffusers import DDPMScheduler
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.model import make_train_scheduler
-from impact_envs.policies.diffusion.normalizer import Normalizer
+from impact_envs.policies.diffusion.normalizer import ACTION_POS, Normalizer
 from impact_envs.policies.diffusion.policy import GRIPPER_DIM
 from impact_learn.dataset import ACTION_KEY, ReplayData, load_replay
 from impact_learn.windows import WindowSampler, window_indices
@@ -84,11 +84,26 @@ def _images(cfg: DiffusionConfig, replay: ReplayData, path: Path) -> dict[str, t
     return {k: torch.from_numpy(replay.data[k]) for k in keys}
 
 
+def _actions_in_frame(cfg: DiffusionConfig, replay: ReplayData, path: Path) -> np.ndarray:
+    """The store's actions in the config's ``action_xyz`` frame: as recorded (absolute TCP
+    targets), or with each step's recorded TCP position subtracted (``delta_measured``)."""
+    actions = np.asarray(replay.data[ACTION_KEY], dtype=np.float32)
+    if cfg.action_xyz == "absolute":
+        return actions
+    if "ee_pos" not in replay.data:
+        raise InvalidArgumentError(
+            f"{path}: action_xyz {cfg.action_xyz!r} needs the store's ee_pos; it has "
+            f"{sorted(replay.data)}")
+    actions = actions.copy()
+    actions[:, ACTION_POS] -= np.asarray(replay.data["ee_pos"], dtype=np.float32)
+    return actions
+
+
 def load_train_data(cfg: DiffusionConfig, path: Path, val_fraction: float) -> TrainData:
     """Load ``path``, split episodes, fit the normalizer on the training part."""
     replay = load_replay(path)  # every chunk checked; NaN/inf in a state or action refused
     obs = replay.obs_matrix(cfg.obs_keys)
-    actions = replay.data[ACTION_KEY]
+    actions = _actions_in_frame(cfg, replay, path)
     _check_gripper(cfg, np.asarray(actions[:, GRIPPER_DIM]))
     train_eps, val_eps = split_episodes(replay.n_episodes, val_fraction, cfg.seed)
     starts = np.concatenate([[0], replay.episode_ends[:-1]])

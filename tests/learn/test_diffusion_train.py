@@ -5,41 +5,21 @@ from __future__ import annotations
 import csv
 import json
 
-import numpy as np
 import pytest
 import torch
+from fixtures.reach_demos import write_dataset
 from safetensors.torch import load_file
 
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
 from impact_learn import train as train_module
-from impact_learn.dataset import EpisodeMeta, ReplayWriter
 from impact_learn.train import RunOptions, lr_at, train
 
 torch.set_num_threads(1)
 CFG = DiffusionConfig(
     down_dims=(16, 32), diffusion_step_embed_dim=16, num_inference_steps=4, batch_size=8
 )
-DIMS = {"ee_pos": 3, "ee_rot6d": 6, "gripper_width": 1, "object_pos": 3, "object_rot6d": 6}
-DIMS |= {"goal_pos": 3, "joint_pos": 7}
-
-
-def write_dataset(path, n_episodes: int = 5, length: int = 12, grip: float = 1.0) -> None:
-    """Synthetic reach demos: the TCP moves linearly to a random goal (gripper command ``grip``)."""
-    rng = np.random.default_rng(0)
-    writer = ReplayWriter(path, DIMS, {"env_id": "Synthetic-v0", "param_name": "object_mass"})
-    rot6d = np.tile([1, 0, 0, 0, 1, 0], (length, 1)).astype(np.float32)
-    for ep in range(n_episodes):
-        goal = rng.uniform(-0.3, 0.3, 3)
-        path_pos = np.linspace(0, 1, length + 1)[:, None] * goal
-        obs = {k: np.zeros((length, d), np.float32) for k, d in DIMS.items()}
-        obs["ee_pos"], obs["goal_pos"] = path_pos[:-1], np.tile(goal, (length, 1))
-        obs["ee_rot6d"] = obs["object_rot6d"] = rot6d
-        actions = np.concatenate([path_pos[1:], rot6d, np.full((length, 1), grip)], axis=1)
-        writer.append_episode(obs, actions, EpisodeMeta(0.2, ep, True, ep))
-
-
 @pytest.fixture
 def data_path(tmp_path):
     path = tmp_path / "demo.zarr"

@@ -28,6 +28,7 @@ DEFAULT_OBS_KEYS: tuple[str, ...] = (
 
 BETA_SCHEDULES = ("squaredcos_cap_v2", "linear", "scaled_linear")
 PREDICTION_TYPES = ("epsilon", "sample")
+ACTION_XYZ_FRAMES = ("absolute", "delta_measured")
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,11 @@ class DiffusionConfig:
         ema_min: Lower bound of the EMA decay.
         ema_max: Upper bound of the EMA decay.
         seed: Seed of weight initialization, batch sampling and training noise.
+        action_xyz: What the action's xyz means: ``"absolute"``, the TCP target position in
+            the world frame [m] (every shipped checkpoint); ``"delta_measured"``, an offset
+            [m] added to the TCP position measured at the step it is executed, as the paper
+            authors' released policy acts (docs/hammer_basket.md). Training subtracts each
+            step's recorded ``ee_pos`` from its action; a changed value needs retraining.
         vision: Camera encoder of a visuomotor policy (``ImageEncoderConfig``; in JSON an
             object of its fields), or None for a state-based policy. With it, ``obs_keys`` are
             the robot's own entries and the cameras' features join them per step.
@@ -97,6 +103,7 @@ class DiffusionConfig:
     ema_min: float = 0.0
     ema_max: float = 0.9999
     seed: int = 0
+    action_xyz: str = "absolute"
     vision: ImageEncoderConfig | None = None
 
     def __post_init__(self) -> None:
@@ -111,6 +118,7 @@ class DiffusionConfig:
         object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
         check_choice("beta_schedule", self.beta_schedule, BETA_SCHEDULES)
         check_choice("prediction_type", self.prediction_type, PREDICTION_TYPES)
+        check_choice("action_xyz", self.action_xyz, ACTION_XYZ_FRAMES)
         self._check_positive()
         self._check_shapes()
 
@@ -159,8 +167,11 @@ class DiffusionConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """Return a JSON-serialisable dict (tuples become lists). A state-based config has no
-        ``vision`` entry, so its file reads as before visuomotor policies existed."""
+        ``vision`` entry and an absolute-action one no ``action_xyz`` entry, so its file reads
+        as before those options existed."""
         out = {k: list(v) if isinstance(v, tuple) else v for k, v in self._items()}
+        if self.action_xyz == "absolute":  # files from before the option read the same
+            del out["action_xyz"]
         if self.vision is None:
             del out["vision"]
         else:

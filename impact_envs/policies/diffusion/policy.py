@@ -39,7 +39,7 @@ from impact_envs.policies.diffusion.model import (
     make_inference_scheduler,
     make_network,
 )
-from impact_envs.policies.diffusion.normalizer import Normalizer
+from impact_envs.policies.diffusion.normalizer import ACTION_POS, Normalizer
 from impact_envs.policies.diffusion.vision import VisuomotorNet
 from impact_envs.policies.interface import ACTION_DIM
 
@@ -175,6 +175,8 @@ class DiffusionPolicy:
         position = np.minimum(self._queue_pos, steps - 1)  # finished envs: last action
         actions = self._queue[np.arange(self.n_envs), position].copy()
         self._queue_pos = np.minimum(self._queue_pos + 1, steps)
+        if self.cfg.action_xyz == "delta_measured":  # the offset meets this step's TCP
+            actions[:, ACTION_POS] += np.asarray(obs["ee_pos"], dtype=np.float32)
         return actions
 
     def _flat_obs(self, obs: Mapping[str, np.ndarray]) -> torch.Tensor:
