@@ -11,7 +11,7 @@ from fixtures.reach_demos import write_dataset
 from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_eval.experiments.dp_inference_cost import random_policy
-from impact_learn.dataset import load_replay
+from impact_learn.dataset import EpisodeMeta, ReplayWriter, load_replay
 from impact_learn.train_data import load_train_data
 
 torch.set_num_threads(1)
@@ -58,3 +58,16 @@ def test_policy_adds_the_measured_tcp_at_each_executed_step(monkeypatch):
         actions = policy.act(obs)
         np.testing.assert_allclose(actions[:, :3], obs["ee_pos"] + offsets[0, 0, :3],
                                    atol=1e-7)
+
+
+def test_a_store_without_the_tcp_position_is_one_line(tmp_path):
+    path = tmp_path / "no_ee.zarr"
+    writer = ReplayWriter(path, {"goal_pos": 3}, {"env_id": "Synthetic-v0",
+                                                  "param_name": "object_mass"})
+    actions = np.zeros((6, 10), np.float32)
+    writer.append_episode({"goal_pos": np.zeros((6, 3), np.float32)}, actions,
+                          EpisodeMeta(0.2, 0, True, 0))
+    cfg = DiffusionConfig(**{**DELTA.to_dict(), "obs_keys": ["goal_pos"]})
+    with pytest.raises(InvalidArgumentError, match="needs the store's ee_pos") as err:
+        load_train_data(cfg, path, val_fraction=0.0)
+    assert "\n" not in str(err.value)
