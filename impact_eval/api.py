@@ -17,12 +17,12 @@ import gymnasium as gym
 import numpy as np
 import pandas as pd
 
-from impact_envs.control.controller import CONTROLLERS
-from impact_envs.control.presets import PRESETS
+from impact_control.controller import CONTROLLERS
+from impact_control.errors import CheckpointError, ImpactError, InvalidArgumentError, check_choice
+from impact_control.policy import Policy
+from impact_control.presets import PRESETS
 from impact_envs.envs.arguments import coerce_options
 from impact_envs.envs.options import ObservationOptions
-from impact_envs.errors import CheckpointError, ImpactError, InvalidArgumentError, check_choice
-from impact_envs.policies.interface import Policy
 from impact_eval.grid import format_value
 from impact_eval.methods import MethodSpec, temporary_method
 
@@ -46,7 +46,7 @@ def _check_policy_object(policy: object, what: str) -> None:
     if missing:
         raise InvalidArgumentError(
             f"{what} {type(policy).__name__} lacks {' and '.join(missing)}; a policy needs "
-            "reset(n_envs) and act(batched obs) -> (B, 10) (impact_envs.policies.interface)")
+            "reset(n_envs) and act(batched obs) -> (B, 10) (impact_control.policy)")
 
 
 def _check_int(name: str, value: object, low: int) -> int:

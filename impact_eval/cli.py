@@ -13,8 +13,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_envs.cli import add_robot_set
-from impact_envs.errors import ImpactError, InvalidArgumentError
 
 PROG = "impact-eval"
 

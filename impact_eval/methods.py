@@ -41,11 +41,11 @@ from pathlib import Path
 
 import gymnasium as gym
 
-from impact_envs.control.controller import CONTROLLERS
-from impact_envs.control.presets import PRESETS
+from impact_control.controller import CONTROLLERS
+from impact_control.errors import CheckpointError, InvalidArgumentError, check_choice
+from impact_control.policy import Policy
+from impact_control.presets import PRESETS
 from impact_envs.envs.options import ObservationOptions, RobotOptions
-from impact_envs.errors import CheckpointError, InvalidArgumentError, check_choice
-from impact_envs.policies.interface import Policy
 from impact_eval.sb3 import load_sb3, sb3_action_mode
 
 """Values of the env's ``controller`` kwarg."""
@@ -69,7 +69,7 @@ class MethodSpec:
     build: PolicyFactory
     description: str
     preset: str = "default"
-    """Controller preset of the method's env (``impact_envs.control.presets.PRESETS``)."""
+    """Controller preset of the method's env (``impact_control.presets.PRESETS``)."""
     warm: bool = False
     """Score episodes from an internal model already trained by one unscored warm-up episode
     of the same cell ("warm robot", the paper's Phase B; docs/eval.md)."""

@@ -11,10 +11,10 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from impact_envs.control.config import ControllerConfig, beyond_hardware_limits
-from impact_envs.control.overrides import apply_overrides
+from impact_control.config import ControllerConfig, beyond_hardware_limits
+from impact_control.errors import ImpactError, InvalidArgumentError
+from impact_control.overrides import apply_overrides
 from impact_envs.envs.options import apply_robot_overrides
-from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.parallel import check_executor
 from impact_eval import csvio, runinfo
 from impact_eval.bins import bin_param_name, parse_bins

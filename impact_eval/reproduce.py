@@ -31,7 +31,8 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.runinfo import cpu_info
 from impact_eval.csvio import encode_rows, file_columns, older_columns_missing, read_rows, row_key
 from impact_eval.grid import format_value
 from impact_eval.report import FLOAT_COLUMNS
@@ -55,7 +56,7 @@ from impact_eval.reproduce_manifest import (
     sha256,
     table_entry,
 )
-from impact_eval.runinfo import IDENTITY_JSON, RUN_JSON, cpu_info, package_versions
+from impact_eval.runinfo import IDENTITY_JSON, RUN_JSON, package_versions
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 PROG = "impact-eval reproduce"

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path, PurePosixPath
 from typing import NamedTuple
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.csvio import read_rows
 from impact_eval.runinfo import RUN_JSON, read_run_json
 

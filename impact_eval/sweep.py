@@ -18,9 +18,9 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_control.errors import ImpactError, InvalidArgumentError
+from impact_control.policy import Policy
 from impact_envs.parallel import single_threaded_children, single_threaded_torch
-from impact_envs.policies.interface import Policy
 from impact_eval.bins import bin_param_name, draw_in_bin
 from impact_eval.chain import chain_jobs, run_chain
 from impact_eval.grid import episode_seed, format_value

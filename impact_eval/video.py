@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.rates import POLICY_HZ
+from impact_control.errors import InvalidArgumentError
+from impact_control.rates import POLICY_HZ
 
 VIDEO_FPS = POLICY_HZ
 """One frame per policy step."""

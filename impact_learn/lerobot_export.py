@@ -24,8 +24,8 @@ from typing import Any
 
 import zarr
 
-from impact_envs.cli import OneLineParser
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_learn.dataset import ACTION_KEY, checked_layout
 from impact_learn.lerobot_video import VideoOptions
 from impact_learn.store_check import scan_store

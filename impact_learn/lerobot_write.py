@@ -30,7 +30,7 @@ def _pa():  # noqa: ANN202 - pyarrow is an optional dependency
         import pyarrow as pa
         import pyarrow.parquet as pq
     except ImportError:
-        from impact_envs.errors import InvalidArgumentError
+        from impact_control.errors import InvalidArgumentError
 
         raise InvalidArgumentError(
             "the LeRobot export needs pyarrow; valid: pip install 'impact-robotics[lerobot]'"

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from impact_envs.errors import ImpactError
+from impact_control.errors import ImpactError
 from impact_learn.lerobot_export import (
     ACTION_NAMES,
     ENV_STATE_FEATURE,

@@ -25,12 +25,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from impact_envs.control.internal_model import ModelSnapshot
+from impact_control.errors import InvalidArgumentError
+from impact_control.internal_model import ModelSnapshot
 from impact_envs.envs.state import _shape_errors, state_identity
-from impact_envs.errors import InvalidArgumentError
 
 if TYPE_CHECKING:
-    from impact_envs.control.controller import ImpactController
+    from impact_control.controller import ImpactController
     from impact_envs.envs.base import ImpactEnv
 
 EPISODE_VIEWS = ("target_filter",)

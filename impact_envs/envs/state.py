@@ -15,9 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
-import torch
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 
 if TYPE_CHECKING:
     from impact_envs.envs.base import ImpactEnv
@@ -34,7 +33,7 @@ class EnvState:
     model: mujoco.MjModel
     data: mujoco.MjData
     arrays: dict[str, np.ndarray]
-    weights: dict[str, torch.Tensor]
+    weights: dict[str, np.ndarray]
     learner: dict[str, Any]
     task: dict[str, Any]
     env: dict[str, Any]
@@ -133,7 +132,7 @@ def capture(env: ImpactEnv) -> EnvState:
         model=copy.deepcopy(env.sim.model),
         data=copy.deepcopy(env.sim.data),
         arrays={k: v.copy() for k, v in _live_arrays(env).items()},
-        weights={k: v.detach().clone() for k, v in im.net.state_dict().items()},
+        weights={k: v.copy() for k, v in im.net.state_dict().items()},
         learner=env.controller.python_state(),
         task=copy.deepcopy(env.task.__dict__),
         env=copy.deepcopy({k: getattr(env, k, None) for k in ENV_FIELDS}),
@@ -155,9 +154,7 @@ def restore(env: ImpactEnv, state: EnvState) -> None:
         np.copyto(live, state.arrays[name])
     ctrl = env.controller
     im = ctrl.internal_model
-    with torch.no_grad():
-        for name, tensor in im.net.state_dict().items():
-            tensor.copy_(state.weights[name])
+    im.net.load_state_dict(state.weights)
     ctrl.load_python_state(state.learner)
     env.task.__dict__.update(copy.deepcopy(state.task))
     for key, value in copy.deepcopy(state.env).items():

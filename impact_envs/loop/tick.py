@@ -17,7 +17,8 @@ import numpy as np
 from numba import njit, types
 from numba.experimental import structref
 
-from impact_envs.control.kernels import (
+from impact_control.chain_dynamics import chain_terms
+from impact_control.kernels import (
     BAD_INPUT,
     BAD_QUAT,
     NON_FINITE,
@@ -25,7 +26,6 @@ from impact_envs.control.kernels import (
     first_bad_input,
     unpack_limiter,
 )
-from impact_envs.robot.chain_dynamics import chain_terms
 from impact_envs.robot.sim_kernels import send, sense
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.tasks.base import Task
 
 TASKS: dict[str, type[Task]] = {}

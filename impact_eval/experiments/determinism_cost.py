@@ -20,8 +20,8 @@ import statistics
 import time
 from pathlib import Path
 
-from impact_envs.cli import OneLineParser
-from impact_envs.errors import ImpactError
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError
 from impact_envs.parallel import single_threaded_torch
 from impact_eval.grid import parse_grid
 from impact_eval.sweep import SweepConfig, Worker, plan_tasks

@@ -35,14 +35,15 @@ import mujoco
 import numpy as np
 import pandas as pd
 
-from impact_envs.cli import OneLineParser, add_robot_set
-from impact_envs.control.config import ControllerConfig
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.presets import preset_config
+from impact_control.cli import OneLineParser
+from impact_control.config import ControllerConfig
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError
+from impact_control.ik import HOME_Q
+from impact_control.presets import preset_config
+from impact_envs.cli import add_robot_set
 from impact_envs.envs.options import RobotOptions, apply_robot_overrides
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import control_tick
-from impact_envs.robot.ik import HOME_Q
 from impact_eval.experiments.physics import Rig
 
 MODES = ("impedance", "impact", "impact_unguarded", "paper", "authors_sim")

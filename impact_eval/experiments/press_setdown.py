@@ -43,12 +43,12 @@ import mujoco
 import numpy as np
 import pandas as pd
 
-from impact_envs.control.controller import ImpactController
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError, check_choice
+from impact_control.ik import HOME_Q
 from impact_envs.envs.options import RobotOptions, apply_robot_overrides
 from impact_envs.envs.robot_parts import build_robot
-from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.loop import control_tick
-from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
 from impact_eval.experiments.physics import Rig
 from impact_eval.experiments.press import TRACES, check_robot_record, mode_controller

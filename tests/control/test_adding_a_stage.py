@@ -28,10 +28,10 @@ STAGE_PATH = "control/friction_observer.py"
 
 EDITS: dict[str, list[tuple[str, str]]] = {
     "control/kernels.py": [
-        ("from impact_envs.control.limits import torque_limiter, unpack_limiter\n",
-         "from impact_envs.control.friction_observer import (\n"
+        ("from impact_control.limits import torque_limiter, unpack_limiter\n",
+         "from impact_control.friction_observer import (\n"
          "    friction_observer_step,\n    unpack_friction_observer,\n)\n"
-         "from impact_envs.control.limits import torque_limiter, unpack_limiter\n"),
+         "from impact_control.limits import torque_limiter, unpack_limiter\n"),
         ("    lim: Packed\n", "    lim: Packed\n    fo: Packed\n"),
         ("    lim = unpack_limiter(state.lim.buffer, state.lim.scalars)[0]\n",
          "    lim = unpack_limiter(state.lim.buffer, state.lim.scalars)[0]\n"
@@ -40,9 +40,9 @@ EDITS: dict[str, list[tuple[str, str]]] = {
          "    fric = friction_observer_step(dq, fric, fo)\n    if est.momentum:\n"),
     ],
     "control/controller.py": [
-        ("from impact_envs.control.limits import TorqueLimiter\n",
-         "from impact_envs.control.friction_observer import FrictionObserver, "
-         "FrictionObserverConfig\nfrom impact_envs.control.limits import TorqueLimiter\n"),
+        ("from impact_control.limits import TorqueLimiter\n",
+         "from impact_control.friction_observer import FrictionObserver, "
+         "FrictionObserverConfig\nfrom impact_control.limits import TorqueLimiter\n"),
         ("        self.limiter = TorqueLimiter(cfg.limits, cfg.dt_s)\n",
          "        self.limiter = TorqueLimiter(cfg.limits, cfg.dt_s)\n"
          "        self.friction_observer = FrictionObserver(FrictionObserverConfig(), cfg.dt_s)\n"),

@@ -63,7 +63,7 @@ def test_refresh_covers_numba_cache_dir(tmp_path, monkeypatch):
 def test_digest_covers_the_modules_of_the_named_tuples_kernels_take():
     """Moving or renaming a kernel-argument named tuple made cached kernels unloadable (they
     pickle the type by module path); its module must count in the digest, @njit or not."""
-    from impact_envs.control.arm_model import DynamicsArrays
+    from impact_control.arm_model import DynamicsArrays
     from impact_envs.robot.sim import SimArrays
 
     covered = {p.relative_to(jit_cache.PACKAGE_DIR).as_posix() for p in jit_cache.digest_sources()}

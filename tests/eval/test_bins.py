@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from fixtures.eval_fake import ENV_ID, FakePolicy
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.api import evaluate
 from impact_eval.bins import MassBin, draw_in_bin, format_bins, parse_bins
 from impact_eval.cli import main

@@ -17,7 +17,7 @@ import gymnasium as gym
 import pytest
 from fixtures.eval_fake import ENV_ID as FAKE_ENV_ID
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.cli import main
 from impact_eval.csvio import read_rows
 from impact_eval.methods import (

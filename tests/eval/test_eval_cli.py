@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from fixtures.eval_fake import run_cli, sweep_args
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.cli import main
 
 PLOTS = [

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.grid import episode_seed, format_value, parse_grid
 from impact_eval.sweep import SweepConfig, plan_tasks
 

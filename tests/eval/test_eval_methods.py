@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from fixtures.eval_fake import BARE_ID, ENV_ID
 
-from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_control.errors import CheckpointError, InvalidArgumentError
 from impact_eval.cli import main
 from impact_eval.methods import (
     CHECKPOINTS_ENV_VAR,
@@ -163,7 +163,7 @@ def test_shipped_checkpoint_loads_and_acts_in_its_env(env_name: str, variant: st
     if variant == "lerobot_dp":
         pytest.importorskip("lerobot", reason="LeRobot's checkpoint needs lerobot")
     import impact_envs
-    from impact_envs.policies.interface import stack_obs
+    from impact_control.policy import stack_obs
     from impact_eval.envs import method_env
 
     monkeypatch.delenv(CHECKPOINTS_ENV_VAR, raising=False)

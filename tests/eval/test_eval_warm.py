@@ -34,14 +34,14 @@ def test_warm_snapshot_is_learned_cached_and_deterministic() -> None:
         assert snap.replay.count > 0  # the warm-up learned something (the 2.5 kg hammer)
         other = second._warm_snapshot(WARM, 2.5)  # another worker computes the same model
         for k, v in snap.weights.items():
-            np.testing.assert_array_equal(v.numpy(), other.weights[k].numpy())
+            np.testing.assert_array_equal(v, other.weights[k])
         np.testing.assert_array_equal(snap.replay.targets, other.replay.targets)
         env = first._envs(WARM, 1)[0]
         env.unwrapped.warm_start(snap)
         env.reset(seed=0, options={"object_mass": 2.5})
         model = env.unwrapped.controller.internal_model
         for k, v in model.net.state_dict().items():
-            np.testing.assert_array_equal(v.numpy(), snap.weights[k].numpy())
+            np.testing.assert_array_equal(v, snap.weights[k])
     finally:
         first.close()
         second.close()
