@@ -142,7 +142,7 @@ def check_fits_env(policy: object, env_id: str, env: gym.Env) -> None:
 
 def _raise_if_all_crashed(out: Path) -> None:
     """``EvaluationError`` when every episode of some cell raised (the CLI's exit 1)."""
-    from impact_eval.cli import crashed_cells
+    from impact_eval.sweep_command import crashed_cells
 
     crashed = crashed_cells(out)
     if crashed:

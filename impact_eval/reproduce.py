@@ -57,6 +57,7 @@ from impact_eval.reproduce_manifest import (
     table_entry,
 )
 from impact_eval.runinfo import IDENTITY_JSON, RUN_JSON, package_versions
+from impact_eval.sweep_command import _Parser, run_sweep_command
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 PROG = "impact-eval reproduce"
@@ -113,8 +114,6 @@ def _positive_int(text: str) -> int:
 
 def parser() -> argparse.ArgumentParser:
     """Parser of ``impact-eval reproduce``."""
-    from impact_eval.cli import _Parser
-
     p = _Parser(prog=PROG, description=__doc__.splitlines()[0])
     p.add_argument("tables", nargs="*", metavar="TABLE", help="table name (a results/ directory)")
     p.add_argument("--check", action="store_true", help="rerun and compare with the committed rows")
@@ -147,7 +146,6 @@ def rerun(table: Table, cells: set[Cell] | None, a: argparse.Namespace, out: Pat
           kept: bool) -> int:
     """Rerun ``table`` (or its ``cells``) into ``out``; print the comparison; exit code. On an
     error, whatever this call created is removed."""
-    from impact_eval.cli import run_sweep_command
     from impact_eval.prepare import check_out_dir
 
     check_out_dir(out)

@@ -19,7 +19,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from impact_envs.parallel import ray_session, ray_task_options, single_threaded_torch
-from impact_eval.sweep import EpisodeBatch, RowSink, SweepConfig, SweepError, Worker
+from impact_eval.sweep_config import EpisodeBatch, RowSink, SweepConfig, SweepError
+from impact_eval.sweep_worker import Worker
 
 _WORKERS: dict[SweepConfig, Worker] = {}
 """This Ray worker process's ``Worker`` (one sweep at a time; a new sweep replaces it)."""

@@ -10,7 +10,7 @@ import numpy as np
 import zarr
 
 from impact_learn.dataset import ACTION_KEY
-from impact_learn.lerobot_export import (
+from impact_learn.lerobot_layout import (
     CHUNKS_SIZE,
     CODEBASE_VERSION,
     DATA_PATH,

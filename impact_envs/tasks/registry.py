@@ -38,9 +38,9 @@ def register_task(task_cls: type[Task]) -> str:
 
 
 def task_class(env_id: str) -> type[Task]:
-    """The task registered under ``env_id`` (a one-line error naming the valid ids)."""
-    import impact_envs  # noqa: F401  (registers the built-in tasks)
-
+    """The task registered under ``env_id`` (a one-line error naming the valid ids). The
+    built-in tasks are registered by then: importing this module runs ``impact_envs``'s
+    ``__init__`` first, which registers them."""
     if env_id not in TASKS:
         raise InvalidArgumentError(f"unknown env {env_id!r}; valid: {', '.join(TASKS)}")
     return TASKS[env_id]
