@@ -20,7 +20,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from safetensors.numpy import load_file, save_file
 
 from impact_control.errors import CheckpointError, InvalidArgumentError
 from impact_control.internal_model import kernels
@@ -350,7 +349,7 @@ class InternalModel:
         """Write weights to ``path`` (.safetensors) and the config to the same stem + .json."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        save_file(dict(self.net.state_dict()), str(path))
+        _safetensors().save_file(dict(self.net.state_dict()), str(path))
         meta = {"format_version": FORMAT_VERSION, "feature_names": list(FEATURE_NAMES)}
         meta["config"] = asdict(self.config)
         path.with_suffix(".json").write_text(json.dumps(meta, indent=2))
@@ -374,7 +373,7 @@ class InternalModel:
         if meta.get("feature_names") != list(FEATURE_NAMES) or not same_shape:
             raise CheckpointError(f"internal model checkpoint {path} does not match the config")
         try:
-            self.net.load_state_dict(load_file(str(path)))
+            self.net.load_state_dict(_safetensors().load_file(str(path)))
         except (RuntimeError, OSError, ValueError) as exc:
             raise CheckpointError(f"cannot load internal model weights {path}: {exc}") from exc
         self.refresh_fast_path()
@@ -393,3 +392,14 @@ class InternalModel:
         model = cls(config)
         model.load(path)
         return model
+
+
+def _safetensors() -> Any:
+    """``safetensors.numpy``, which the benchmark installs ([bench]) and a robot PC's light
+    install does not: saving or loading a model there is a one-line ``CheckpointError``."""
+    try:
+        import safetensors.numpy
+    except ImportError:
+        raise CheckpointError("saving or loading an internal model needs safetensors "
+                              "(pip install safetensors, or the [bench] extra)") from None
+    return safetensors.numpy
