@@ -2,7 +2,7 @@
 
 The data crosses as named structures: ``StepPlan`` (this step's targets, noise draws and
 records), ``SimArrays`` (the simulator's views, ``robot/sim.py``), ``ArmArrays`` (the arm
-model, ``robot/chain_dynamics.py``), ``DynamicsArrays`` and ``ControllerState`` (the
+model, ``impact_control/chain_dynamics.py``), ``DynamicsArrays`` and ``ControllerState`` (the
 controller's, ``control/``). ``bundle_tick_args`` gathers them once per policy step into one
 ``TickArgs`` (a numba structref), so each tick's call (``bundled_tick``) crosses one pointer
 instead of unboxing some 60 arrays (measured by ``impact_eval.experiments.crossing_cost``).
