@@ -71,7 +71,7 @@ def test_deepcopy_and_pickle_step_identically(env_id):
 
 def _cut_weight(state):
     name = next(iter(state.weights))
-    state.weights[name] = state.weights[name][:1].clone()
+    state.weights[name] = state.weights[name][:1].copy()
 
 
 def _cut_array(state):
