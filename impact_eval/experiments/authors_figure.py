@@ -5,7 +5,7 @@ bin sweep (``impact-eval --mass-bins``, their 8 bins). It prints, and writes to
 ``TABLE/authors_figure.md``, success per bin with its 95 % Wilson interval for every method,
 their published rate beside each of their three rows, and issue 38's acceptance checks; it
 draws ``TABLE/plots/authors_figure.{png,pdf}`` like theirs (success per bin and the mean),
-their values as hollow markers over our bars.
+their values as white diamonds on our bars of the same method.
 
 Their values: ``resources/SR_3d.svg`` of ``Winston-Gu/IMPACT`` (gh-pages), read in
 ../shared/reference/authors_impact.md. Their IMPACT row is their controller, ours
@@ -126,17 +126,18 @@ def plot(rates: pd.DataFrame, path: Path) -> list[Path]:
         ys = [r.loc[lo].rate if lo in r.index else np.nan for lo, _ in BINS]
         ys.append(float(np.nanmean(ys)))
         xs = x - 0.4 + width * (j + 0.5)
-        bars = ax.bar(xs, ys, width, label=LABELS[method])
+        ax.bar(xs, ys, width, label=LABELS[method])
         if method in PUBLISHED:
             pub = [*PUBLISHED[method], float(np.mean(PUBLISHED[method]))]
-            ax.scatter(xs, pub, marker="o", facecolors="none",
-                       edgecolors=bars.patches[0].get_facecolor(), linewidths=1.5, zorder=3)
+            ax.scatter(xs, pub, marker="D", s=28, facecolors="white", edgecolors="black",
+                       linewidths=1.2, zorder=3,  # on its own bar: white, black-edged
+                       label="published (their figure)" if j == 0 else None)
     ax.set_xticks(x, [f"{lo:g}–{hi:g}" for lo, hi in BINS] + ["mean"])
     ax.set_xlabel("hammer mass bin [kg]")
     ax.set_ylabel("success rate")
     ax.set_ylim(0, 1.05)
     ax.set_title("HammerBasket: ours (bars, 95 % Wilson per bin in the table) and the authors' "
-                 "published rates (hollow markers)", fontsize=9)
+                 "published rates (white diamonds, on the bar of the same method)", fontsize=9)
     ax.legend(fontsize=7, ncol=3, loc="upper right")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
