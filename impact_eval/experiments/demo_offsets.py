@@ -15,6 +15,7 @@ import argparse
 
 import numpy as np
 
+from impact_envs.errors import InvalidArgumentError
 from impact_learn.store_check import open_store
 
 GRAVITY_M_S2 = 9.81
@@ -24,6 +25,11 @@ def offsets(data: str, lifted_m: float) -> tuple[np.ndarray, np.ndarray]:
     """(mass [kg], median commanded-minus-measured TCP z while lifted [m]) per demo that
     lifted its object."""
     root = open_store(data)
+    missing = [k for k in ("data/action", "data/ee_pos", "data/object_pos",
+                           "meta/episode_param") if k not in root]
+    if missing:
+        raise InvalidArgumentError(f"{data} lacks {', '.join(missing)}; valid: a store written "
+                                   "by impact-collect with a mass parameter")
     action, ee = root["data/action"][:], root["data/ee_pos"][:]
     obj = root["data/object_pos"][:]
     ends, masses = root["meta/episode_ends"][:], root["meta/episode_param"][:]
@@ -44,7 +50,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="the object counts as carried this far above its start [m]")
     parser.add_argument("--stiffness", type=float, default=400.0, help="K [N/m]")
     args = parser.parse_args(argv)
-    mass, dz = offsets(args.data, args.lifted_m)
+    if args.bands < 1 or args.lifted_m <= 0 or args.stiffness <= 0:
+        parser.error("--bands must be >= 1, --lifted-m and --stiffness > 0")
+    try:
+        mass, dz = offsets(args.data, args.lifted_m)
+    except InvalidArgumentError as exc:
+        parser.error(str(exc))
+    if not len(mass):
+        parser.error(f"--data {args.data}: no demo lifted its object by {args.lifted_m} m")
     edges = np.linspace(mass.min(), mass.max(), args.bands + 1)
     print(f"{len(mass)} demos that lifted their object; commanded minus measured TCP z while "
           "carried (median per demo, mean over the band):")

@@ -52,7 +52,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--x-below", type=float, default=0.30, help="region: hammer x < [m]")
     parser.add_argument("--y-below", type=float, default=-0.35, help="region: hammer y < [m]")
     args = parser.parse_args(argv)
-    episodes = pd.read_csv(args.table / "episodes.csv")
+    csv = args.table / "episodes.csv"
+    if not csv.is_file():
+        parser.error(f"--table {args.table}: no episodes.csv there; valid: a sweep's folder")
+    episodes = pd.read_csv(csv)
+    if not {"method", "seed", "success"} <= set(episodes.columns):
+        parser.error(f"--table {args.table}: episodes.csv lacks method, seed or success")
     table = episodes.merge(spawns(episodes["seed"].to_numpy()), on="seed")
     inside = (table["hammer_x"] < args.x_below) & (table["hammer_y"] < args.y_below)
     print(f"region: hammer x < {args.x_below} m and y < {args.y_below} m "

@@ -44,3 +44,18 @@ def test_main_prints_one_line_per_band(tmp_path, capsys) -> None:
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith("2 demos") and len(lines) == 3
     assert "offset 0.50 cm" in lines[1] and "offset 2.00 cm" in lines[2]
+
+
+def test_bad_input_is_one_line(tmp_path, capsys) -> None:
+    import pytest
+
+    for argv, says in ((["--data", str(tmp_path / "missing.zarr")], "does not exist"),
+                       (["--data", _store(tmp_path / "s.zarr", [(0.2, 0.005, 40)]),
+                         "--bands", "0"], "--bands must be >= 1")):
+        with pytest.raises(SystemExit) as exc:
+            main(argv)
+        last = capsys.readouterr().err.strip().splitlines()[-1]
+        assert exc.value.code == 2 and "error:" in last and says in last
+    with pytest.raises(SystemExit):
+        main(["--data", _store(tmp_path / "flat.zarr", [(0.2, 0.005, 4)])])  # nothing lifted
+    assert "no demo lifted" in capsys.readouterr().err

@@ -33,3 +33,11 @@ def test_split_counts_every_episode_once(tmp_path, capsys) -> None:
     line_b = next(line for line in out.splitlines() if line.startswith("| `b`"))
     assert f"{inside}/{inside} " in line_b and f"{4 - inside}/{4 - inside} " in line_b
     assert "episodes failed under every method: 0 of 4" in out
+
+
+def test_a_folder_without_a_table_is_one_line(tmp_path, capsys) -> None:
+    import pytest
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--table", str(tmp_path)])
+    assert exc.value.code == 2 and "no episodes.csv there" in capsys.readouterr().err
