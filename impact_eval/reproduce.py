@@ -75,7 +75,7 @@ def parse_cells(spec: str, args: dict) -> set[Cell]:
         raise InvalidArgumentError(f"--cells {spec!r} names no cell; valid: {valid}")
     cells = set()
     for item in items:
-        method, sep, value = item.partition("@")
+        method, sep, value = item.rpartition("@")  # a composed method may hold an @
         try:
             text = format_value(float(value))
         except ValueError:

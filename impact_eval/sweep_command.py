@@ -123,7 +123,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         default=[],
         metavar="SECTION.FIELD=VALUE",
         help="change one field of the controller config on top of each method's preset "
-        "('default', or 'paper' for *_paper methods; repeatable; ablations), e.g. "
+        "(its @PRESET, docs/eval.md 'Methods'; repeatable; ablations), e.g. "
         "internal_model.slow_rate_max=1.5; recorded in run.json",
     )
     add_robot_set(p, "run.json, checked on --resume; for every method")

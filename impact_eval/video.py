@@ -42,7 +42,7 @@ def require_video() -> None:
 
 def video_path(root: Path, method: str, param: str, value: str, episode: int) -> Path:
     """``root/<method>/<param>=<value>_ep<episode>.mp4`` (method made file-name safe)."""
-    safe = re.sub(r"[^A-Za-z0-9_.=-]+", "_", method).strip("_")
+    safe = re.sub(r"[^A-Za-z0-9_.=+@-]+", "_", method).strip("_")  # keeps a composition
     return root / safe / f"{param}={value}_ep{episode:03d}.mp4"
 
 

@@ -221,7 +221,7 @@ def test_camera_methods_make_their_envs_with_the_checkpoint_cameras():
     cameras (no object pose), and these methods share envs only with methods of the same
     observation."""
     from impact_eval.envs import method_env
-    from impact_eval.methods import RGB_OBSERVATION
+    from impact_eval.method_parts import RGB_OBSERVATION
 
     rgb, impact_rgb = resolve_method("vanilla_dp_rgb"), resolve_method("impact_rgb")
     paper = resolve_method("impact_rgb_paper")

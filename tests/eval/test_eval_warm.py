@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from impact_eval.methods import MethodSpec, _build_scripted, register_method, resolve_method
+from impact_eval.method_parts import policy_part
+from impact_eval.methods import MethodSpec, register_method, resolve_method
 from impact_eval.sweep import SweepConfig, Worker
 
-WARM = MethodSpec("scripted_impact_warm_test", "impact", _build_scripted,
+WARM = MethodSpec("scripted_impact_warm_test", "impact", policy_part("scripted").build,
                   "scripted expert, IMPACT, warm (test)", warm=True)
 
 

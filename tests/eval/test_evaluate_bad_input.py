@@ -205,7 +205,7 @@ def test_camera_checkpoint_fits_the_env_it_was_trained_for() -> None:
     import gymnasium as gym
 
     from impact_eval.api import check_fits_env
-    from impact_eval.methods import RGB_OBSERVATION
+    from impact_eval.method_parts import RGB_OBSERVATION
 
     env = gym.make(HAMMER, observation=RGB_OBSERVATION)
     try:
