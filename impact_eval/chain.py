@@ -58,8 +58,8 @@ def chain_jobs(cfg: SweepConfig, value_index: int, method: str,
     """(chain, to write) of a carried cell: every episode from 0 to the last one not in
     ``done`` (keys as ``csvio.row_key``), and those of them not in ``done``; both empty when
     the cell is complete."""
-    jobs = [cfg.job(value_index, e) for e in range(cfg.episodes)]
-    value = cfg.values[value_index]
+    jobs = [cfg.job(value_index, e) for e in range(cfg.spec.episodes)]
+    value = cfg.spec.values[value_index]
     todo = tuple(j for j in jobs if (method, format_value(value), j.episode) not in done)
     if not todo:
         return (), ()

@@ -33,14 +33,14 @@ def plan_tasks(cfg: SweepConfig, done: set[tuple[str, str, int]]) -> list[Episod
     task, in the first block (``chain.chain_jobs``).
     """
     tasks = []
-    size = cfg.envs_per_worker
-    carried_methods = {m for m in cfg.methods if carried(m)}
-    for vi, value in enumerate(cfg.values):
-        for start in range(0, cfg.episodes, size):
-            for method in cfg.methods:
+    size = cfg.options.envs_per_worker
+    carried_methods = {m for m in cfg.spec.methods if carried(m)}
+    for vi, value in enumerate(cfg.spec.values):
+        for start in range(0, cfg.spec.episodes, size):
+            for method in cfg.spec.methods:
                 if method not in carried_methods:
                     tasks.append(EpisodeBatch(method, value, tuple(
-                        cfg.job(vi, e) for e in range(start, min(start + size, cfg.episodes))
+                        cfg.job(vi, e) for e in range(start, min(start + size, cfg.spec.episodes))
                         if (method, format_value(value), e) not in done)))
                 elif start == 0:
                     chain, todo = chain_jobs(cfg, vi, method, done)
@@ -154,8 +154,8 @@ def run_sweep(cfg: SweepConfig, tasks: Sequence[EpisodeBatch], sink: RowSink) ->
         bar.update(1)
 
     try:
-        n = min(cfg.workers, len(tasks))
-        if cfg.executor == "ray":
+        n = min(cfg.options.workers, len(tasks))
+        if cfg.options.executor == "ray":
             from impact_eval.sweep_ray import run_on_ray
 
             run_on_ray(cfg, tasks, counted)

@@ -225,29 +225,14 @@ def run_sweep_command(argv: Sequence[str]) -> int:
 def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
     """Run a parsed sweep command."""
     from impact_eval.execute import execute
-    from impact_eval.prepare import SweepRequest, prepare
+    from impact_eval.prepare import prepare
+    from impact_eval.spec import RunOptions, SweepSpec
 
-    request = SweepRequest(
-        env_id=a.env,
-        methods=a.method,
-        grid=a.grid,
-        param=a.param,
-        episodes=a.episodes,
-        out=a.out,
-        workers=a.workers,
-        envs_per_worker=a.envs_per_worker,
-        seed=a.seed,
-        resume=a.resume,
-        extend=a.extend,
-        video_episodes=a.video,
-        controller_overrides=tuple(a.controller_set),
-        robot_overrides=tuple(a.robot_set),
-        beyond_hardware_limits=a.beyond_hardware_limits,
-        executor=a.executor,
-        ray_address=a.ray_address,
-        mass_bins=a.mass_bins,
-    )
-    plan = prepare(request)
+    spec = SweepSpec.from_cli(a)
+    options = RunOptions(out=a.out, workers=a.workers, envs_per_worker=a.envs_per_worker,
+                         resume=a.resume, extend=a.extend, video_episodes=a.video,
+                         executor=a.executor, ray_address=a.ray_address)
+    plan = prepare(spec, options)
     t0 = time.perf_counter()
     result = execute(plan, command=[PROG, *argv], args=vars(a))
     wall = time.perf_counter() - t0

@@ -42,7 +42,7 @@ def run_task(cfg: SweepConfig, task: EpisodeBatch) -> list[dict[str, object]]:
 
 def run_on_ray(cfg: SweepConfig, tasks: Sequence[EpisodeBatch], sink: RowSink) -> None:
     """Run ``tasks`` on Ray; ``sink(row)`` is called in this process for every episode."""
-    with ray_session(cfg.ray_address) as ray:
+    with ray_session(cfg.options.ray_address) as ray:
         remote = ray.remote(run_task).options(**ray_task_options())
         cfg_ref = ray.put(cfg)
         pending = [remote.remote(cfg_ref, task) for task in tasks]

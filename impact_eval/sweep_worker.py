@@ -31,7 +31,7 @@ class Worker:
     def __init__(self, cfg: SweepConfig) -> None:
         from impact_eval.envs import import_env_module
 
-        import_env_module(cfg.env_id)
+        import_env_module(cfg.spec.env_id)
         self.cfg = cfg
         self.envs: dict[tuple, list[object]] = {}
         self.policies: dict[str, Policy] = {}
@@ -43,9 +43,9 @@ class Worker:
 
         envs = self.envs.setdefault(spec.env_key, [])
         while len(envs) < n:
-            envs.append(method_env(self.cfg.env_id, spec, self.cfg.controller_overrides,
-                                   render=self.cfg.video_episodes > 0,
-                                   robot_overrides=self.cfg.robot_overrides))
+            envs.append(method_env(self.cfg.spec.env_id, spec, self.cfg.spec.controller_overrides,
+                                   render=self.cfg.options.video_episodes > 0,
+                                   robot_overrides=self.cfg.spec.robot_overrides))
         return envs
 
     def _policy(self, method: str) -> Policy:
@@ -84,14 +84,14 @@ class Worker:
 
     def _videos(self, task: EpisodeBatch) -> dict[int, object]:
         """The task's episodes to record (episode index < ``video_episodes``), by batch index."""
-        if not self.cfg.video_episodes:
+        if not self.cfg.options.video_episodes:
             return {}
         from impact_eval.video import EpisodeVideo, video_path
 
         root = Path(self.cfg.video_dir)
         return {i: EpisodeVideo(video_path(root, task.method, self.cfg.param_name,
                                            format_value(job.value), job.episode))
-                for i, job in enumerate(task.jobs) if job.episode < self.cfg.video_episodes}
+                for i, job in enumerate(task.jobs) if job.episode < self.cfg.options.video_episodes}
 
     def _warm_snapshot(self, spec: MethodSpec, value: float) -> object:
         """The cell's warm-up snapshot (``warm.warm_up``), computed once per worker."""
@@ -100,8 +100,8 @@ class Worker:
         key = (spec.name, value)
         if key not in self.warm:
             self.warm[key] = warm_up(self._envs(spec, 1)[0], self._policy(spec.name),
-                                     self.cfg.param_name, self.cfg.policy_dt, self.cfg.seed,
-                                     self.cfg.values.index(value), value)
+                                     self.cfg.param_name, self.cfg.policy_dt, self.cfg.spec.seed,
+                                     self.cfg.spec.values.index(value), value)
         return self.warm[key]
 
     def close(self) -> None:

@@ -22,6 +22,7 @@ from impact_eval.cli import main
 from impact_eval.csvio import read_rows
 from impact_eval.method_parts import AUTHORS_ROBOT, policy_part
 from impact_eval.methods import MethodSpec, register_method, resolve_method
+from impact_eval.spec import RunOptions, SweepSpec
 from impact_eval.sweep import SweepConfig, plan_tasks
 
 BARE_ID = "ImpactCarryTest/Hammer-v0"
@@ -171,9 +172,10 @@ def test_a_resume_under_another_realism_is_refused(reference: Path, tmp_path: Pa
 
 
 def _config(methods: tuple[str, ...], episodes: int = 4) -> SweepConfig:
-    return SweepConfig(env_id=ENV_ID, canonical_env_id=BARE_ID, param_name="object_mass",
-                       policy_dt=1 / 30, methods=methods, values=(0.5, 2.5), episodes=episodes,
-                       seed=4, workers=1, envs_per_worker=2)
+    spec = SweepSpec(env_id=ENV_ID, methods=methods, values=(0.5, 2.5), episodes=episodes,
+                     seed=4)
+    return SweepConfig(spec, RunOptions(out=Path("unused"), envs_per_worker=2),
+                       canonical_env_id=BARE_ID, param_name="object_mass", policy_dt=1 / 30)
 
 
 def test_a_carried_cell_is_one_task_rerun_from_its_start() -> None:

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from impact_eval.method_parts import policy_part
 from impact_eval.methods import MethodSpec, register_method, resolve_method
+from impact_eval.spec import RunOptions, SweepSpec
 from impact_eval.sweep import SweepConfig, Worker
 
 WARM = MethodSpec("scripted_impact_warm_test", "impact", policy_part("scripted").build,
@@ -14,9 +17,11 @@ WARM = MethodSpec("scripted_impact_warm_test", "impact", policy_part("scripted")
 
 
 def _config() -> SweepConfig:
-    return SweepConfig(env_id="IMPACT/Hammer-v0", canonical_env_id="IMPACT/Hammer-v0",
-                       param_name="object_mass", policy_dt=1 / 30, methods=(WARM.name,),
-                       values=(0.2, 2.5), episodes=2, seed=5, workers=1, envs_per_worker=2)
+    spec = SweepSpec(env_id="IMPACT/Hammer-v0", methods=(WARM.name,), values=(0.2, 2.5),
+                     episodes=2, seed=5)
+    return SweepConfig(spec, RunOptions(out=Path("unused"), envs_per_worker=2),
+                       canonical_env_id="IMPACT/Hammer-v0", param_name="object_mass",
+                       policy_dt=1 / 30)
 
 
 def test_builtin_warm_method_is_registered() -> None:
