@@ -96,6 +96,14 @@ class PinocchioArm:
 
     n: int = 7
 
+    STATELESS: tuple[str, ...] = (
+        "damping", "q_lower", "q_upper", "torque_limits",  # the model's constants
+        "pos_ee_world", "rot_ee_world", "jacobian", "mass_matrix", "gravity",
+        "coriolis_matrix", "q_model", "dq_model", "chain_work")  # recomputed by every update
+    """Arrays that carry nothing a controller snapshot must restore (``get_state``): the
+    model's constants, and the terms ``update`` (or the closed loop's ``chain_terms``)
+    recomputes from (q, dq) every tick before any stage reads them, with their scratch."""
+
     def __init__(
         self,
         xml_path: str | Path | None = None,
