@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impact_envs.policies.interface import SeededPolicy
+from impact_control.policy import SeededPolicy
 from impact_learn.dataset import load_replay
 
 ENV_ID = "IMPACT/Hammer-v0"

@@ -16,8 +16,8 @@ import functools
 import numpy as np
 import pylibfranka as plf
 
-from impact_envs.control.controller import ImpactController
-from impact_envs.robot.dynamics import PinocchioArm
+from impact_control.controller import ImpactController
+from impact_control.dynamics import PinocchioArm
 from impact_franka.demo import CirclePolicy
 from impact_franka.fci import fr3_config
 from impact_franka.policy_loop import PolicyTarget

@@ -9,8 +9,11 @@ ObservationOptions, RenderOptions, RobotOptions``.
 
 from __future__ import annotations
 
+from pathlib import Path as _Path
+
+from impact_control import __version__  # noqa: E402 - one version for the distribution
+from impact_control import jit_cache as _jit_cache
 from impact_envs import _gl  # noqa: F401, I001 - first: MuJoCo reads MUJOCO_GL on import
-from impact_envs import jit_cache as _jit_cache
 from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.tasks.calligraphy import CalligraphyTask as _CalligraphyTask
 from impact_envs.tasks.disturbance import DisturbanceTask as _DisturbanceTask
@@ -19,12 +22,12 @@ from impact_envs.tasks.hammer import HammerTask as _HammerTask
 from impact_envs.tasks.hammer_basket import HammerBasketTask as _HammerBasketTask
 from impact_envs.tasks.registry import register_task as _register_task
 
-__version__ = "0.1.0"
-
 ENV_IDS = tuple(_register_task(t) for t in (_HammerTask, _DumbbellTask, _CalligraphyTask,
                                               _DisturbanceTask, _HammerBasketTask))
 """The built-in envs, one per task."""
 
-_jit_cache.ensure_fresh_kernel_cache()
+_PACKAGE_DIR = _Path(__file__).resolve().parent
+_jit_cache.ensure_fresh_kernel_cache((_PACKAGE_DIR / "loop", _PACKAGE_DIR / "robot"),
+                                     depends_on=(_jit_cache.PACKAGE_DIR,))
 
 __all__ = ["ENV_IDS", "ObservationOptions", "RenderOptions", "RobotOptions", "__version__"]

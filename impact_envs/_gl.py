@@ -81,7 +81,7 @@ def select_headless_backend() -> str | None:
 
 
 def _rendering_error(reason: str) -> Exception:
-    from impact_envs.errors import RenderingError as Error
+    from impact_control.errors import RenderingError as Error
 
     gl = os.environ.get("MUJOCO_GL") or "unset"
     display = "a display" if has_display(os.environ) else "no display"

@@ -15,7 +15,7 @@ import socket
 from collections.abc import Iterator
 from types import ModuleType
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 
 THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 """Thread-count variables read by OpenMP (torch), NumPy's OpenBLAS and MKL when they load."""

@@ -27,8 +27,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from impact_envs.control.lie import quat_to_matrix, rot6d_from_matrix, so3_exp
-from impact_envs.errors import InvalidArgumentError, SimulationError, check_choice
+from impact_control.errors import InvalidArgumentError, SimulationError, check_choice
+from impact_control.lie import quat_to_matrix, rot6d_from_matrix, so3_exp
 
 ACTION_MODES = ("absolute", "delta")
 

@@ -17,14 +17,15 @@ import gymnasium as gym
 import numpy as np
 import pandas as pd
 
-from impact_envs.control.controller import CONTROLLERS
-from impact_envs.control.presets import PRESETS
+from impact_control.controller import CONTROLLERS
+from impact_control.errors import CheckpointError, ImpactError, InvalidArgumentError, check_choice
+from impact_control.policy import Policy
+from impact_control.presets import PRESETS
 from impact_envs.envs.arguments import coerce_options
 from impact_envs.envs.options import ObservationOptions
-from impact_envs.errors import CheckpointError, ImpactError, InvalidArgumentError, check_choice
-from impact_envs.policies.interface import Policy
 from impact_eval.grid import format_value
 from impact_eval.methods import MethodSpec, temporary_method
+from impact_eval.spec import RunOptions, SweepSpec, values_from_text
 
 
 class EvaluationError(ImpactError):
@@ -46,7 +47,7 @@ def _check_policy_object(policy: object, what: str) -> None:
     if missing:
         raise InvalidArgumentError(
             f"{what} {type(policy).__name__} lacks {' and '.join(missing)}; a policy needs "
-            "reset(n_envs) and act(batched obs) -> (B, 10) (impact_envs.policies.interface)")
+            "reset(n_envs) and act(batched obs) -> (B, 10) (impact_control.policy)")
 
 
 def _check_int(name: str, value: object, low: int) -> int:
@@ -142,7 +143,7 @@ def check_fits_env(policy: object, env_id: str, env: gym.Env) -> None:
 
 def _raise_if_all_crashed(out: Path) -> None:
     """``EvaluationError`` when every episode of some cell raised (the CLI's exit 1)."""
-    from impact_eval.cli import crashed_cells
+    from impact_eval.sweep_command import crashed_cells
 
     crashed = crashed_cells(out)
     if crashed:
@@ -189,8 +190,9 @@ def evaluate(
         out: Output directory: ``episodes.csv``, ``summary.csv``, ``run.json``, ``plots/``.
         episodes: Episodes per value (paired seeds, as the CLI's).
         controller: ``"impact"`` or ``"impedance"``.
-        controller_preset: The controller's preset, ``"default"`` or ``"paper"``
-            (docs/controller.md, "Presets").
+        controller_preset: The controller's preset, one of ``impact_control.presets.PRESETS``
+            (``"default"``, ``"paper"``, ``"authors_sim"``, ``"authors_real"``;
+            docs/controller.md, "Presets").
         name: The method's name in the CSV and plots; not a built-in method's name. It is
             registered for this call only.
         param: The parameter to sweep (default: the env's first).
@@ -214,7 +216,7 @@ def evaluate(
             rows are in ``out/episodes.csv``, as the CLI's exit 1.
     """
     from impact_eval.execute import execute
-    from impact_eval.prepare import SweepRequest, prepare
+    from impact_eval.prepare import prepare
 
     build = _policy_factory(policy)
     grid, mass_bins = grid_or_bins(values)
@@ -222,26 +224,24 @@ def evaluate(
     check_choice("controller_preset", controller_preset, PRESETS)
     if not isinstance(env_id, str):
         raise InvalidArgumentError(f"invalid env_id {env_id!r}; valid: a registered env id")
-    request = SweepRequest(
-        env_id=env_id, methods=_check_name(name),
-        grid=grid, mass_bins=mass_bins, param=param,
-        episodes=_check_int("episodes", episodes, 1), out=Path(out), workers=1,
-        envs_per_worker=_check_int("envs_per_worker", envs_per_worker, 1),
-        seed=_check_int("seed", seed, 0), resume=bool(resume),
-        robot_overrides=_check_robot_set(robot_set),
-    )
+    points, highs = values_from_text(grid, mass_bins)
+    spec = SweepSpec(
+        env_id=env_id, methods=(_check_name(name),), values=points, bin_highs=highs,
+        param=param, episodes=_check_int("episodes", episodes, 1),
+        seed=_check_int("seed", seed, 0), robot_overrides=_check_robot_set(robot_set))
+    run = RunOptions(out=Path(out), workers=1, resume=bool(resume),
+                     envs_per_worker=_check_int("envs_per_worker", envs_per_worker, 1))
     options = coerce_options("observation", observation, ObservationOptions)
-    spec = MethodSpec(name, controller, build, "evaluate() policy object",
-                      preset=controller_preset,
-                      observation=options if options.uses_images else None)
-    with temporary_method(spec):
-        plan = prepare(request)
-        args = {"env": env_id, "method": name, "grid": request.grid,
-                "mass_bins": request.mass_bins, "param": param,
-                "episodes": episodes, "out": str(out), "seed": seed, "controller": controller,
-                "controller_preset": controller_preset}
-        if spec.observation is not None:
-            args["observation"] = repr(spec.observation)
+    method = MethodSpec(name, controller, build, "evaluate() policy object",
+                        preset=controller_preset,
+                        observation=options if options.uses_images else None)
+    with temporary_method(method):
+        plan = prepare(spec, run)
+        args = {"env": env_id, "method": name, "grid": grid, "mass_bins": mass_bins,
+                "param": param, "episodes": episodes, "out": str(out), "seed": seed,
+                "controller": controller, "controller_preset": controller_preset}
+        if method.observation is not None:
+            args["observation"] = repr(method.observation)
         execute(plan, command=[sys.argv[0], "impact_eval.evaluate"], args=args)
     _raise_if_all_crashed(Path(out))
     return pd.read_csv(Path(out) / "episodes.csv", keep_default_na=False)

@@ -31,12 +31,12 @@ import mujoco
 import numpy as np
 
 import impact_envs
-from impact_envs.cli import OneLineParser
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError, InvalidArgumentError
+from impact_control.policy import stack_obs
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.envs.pixels import check_view
-from impact_envs.errors import ImpactError, InvalidArgumentError
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 from impact_eval.bench_pixels import pixel_costs, print_pixel_table
 
 

@@ -18,10 +18,10 @@ from collections.abc import Callable
 import gymnasium as gym
 import numpy as np
 
+from impact_control.policy import stack_obs
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.envs.pixels import PixelObservations, scene_cameras
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 
 STATE_STEP = "env step, state (reference)"
 VARIANTS = (("rgb", "rgb", True), ("rgbd", "rgb+depth", True), ("rgb", "rgb, no shadows", False))

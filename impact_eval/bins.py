@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.grid import GRID_DECIMALS
 
 _BINS_HELP = ("expected a comma list of LO-HI bins in kg, ascending and not overlapping "

@@ -22,14 +22,30 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Set
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
+from impact_control.policy import Policy
 from impact_eval.grid import format_value
 from impact_eval.rollout import EpisodeJob, LockstepBatch
+from impact_eval.sweep_config import EpisodeBatch, RowSink, SweepConfig
 
 if TYPE_CHECKING:
     from impact_eval.methods import MethodSpec
-    from impact_eval.sweep import EpisodeBatch, RowSink, SweepConfig, Worker
+
+
+class ChainWorker(Protocol):
+    """What a chain uses of its worker (``sweep_worker.Worker``)."""
+
+    cfg: SweepConfig
+
+    def _envs(self, spec: MethodSpec, n: int) -> list[object]: ...
+
+    def _policy(self, method: str) -> Policy: ...
+
+    def _videos(self, task: EpisodeBatch) -> dict[int, object]: ...
+
+    def row(self, method: str, job: EpisodeJob,
+            metrics: dict[str, object]) -> dict[str, object]: ...
 
 CRASHED = ("unstable", "exception")
 """``failure_reason`` prefixes of an episode that raised: it carries no state on."""
@@ -42,15 +58,15 @@ def chain_jobs(cfg: SweepConfig, value_index: int, method: str,
     """(chain, to write) of a carried cell: every episode from 0 to the last one not in
     ``done`` (keys as ``csvio.row_key``), and those of them not in ``done``; both empty when
     the cell is complete."""
-    jobs = [cfg.job(value_index, e) for e in range(cfg.episodes)]
-    value = cfg.values[value_index]
+    jobs = [cfg.job(value_index, e) for e in range(cfg.spec.episodes)]
+    value = cfg.spec.values[value_index]
     todo = tuple(j for j in jobs if (method, format_value(value), j.episode) not in done)
     if not todo:
         return (), ()
     return tuple(jobs[:todo[-1].episode + 1]), todo
 
 
-def run_chain(worker: Worker, spec: MethodSpec, task: EpisodeBatch, sink: RowSink,
+def run_chain(worker: ChainWorker, spec: MethodSpec, task: EpisodeBatch, sink: RowSink,
               heartbeat: Callable[[], None] | None = None) -> None:
     """Run ``task.chain`` on one of ``worker``'s envs, carrying the controller state from each
     episode into the next; ``sink`` receives the rows of ``task.jobs``."""
@@ -69,7 +85,7 @@ def run_chain(worker: Worker, spec: MethodSpec, task: EpisodeBatch, sink: RowSin
         base.carry_controller(None)  # nothing pending for the worker's next task on this env
 
 
-def _run_episode(worker: Worker, spec: MethodSpec, task: EpisodeBatch, env: object,
+def _run_episode(worker: ChainWorker, spec: MethodSpec, task: EpisodeBatch, env: object,
                  job: EpisodeJob, sink: RowSink | None,
                  heartbeat: Callable[[], None] | None) -> str | None:
     """Run one episode of the chain alone; its row goes to ``sink`` (None: a rerun episode

@@ -14,7 +14,7 @@ import os
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.grid import format_value
 from impact_eval.metrics import ADDED_COLUMNS, EPISODE_COLUMNS
 

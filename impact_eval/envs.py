@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_control.errors import ImpactError, InvalidArgumentError
 
 DEFAULT_PARAM_NAME = "object_mass"
 """Parameter swept when the env does not declare ``param_name``."""
@@ -84,8 +84,8 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
     if robot is not None:
         extra["robot"] = robot  # a RobotOptions (the *_authors methods' torque reading)
     if overrides:
-        from impact_envs.control.overrides import apply_overrides
-        from impact_envs.control.presets import preset_config
+        from impact_control.overrides import apply_overrides
+        from impact_control.presets import preset_config
 
         extra["controller_preset"] = apply_overrides(preset_config(preset), overrides)
     try:

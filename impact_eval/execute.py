@@ -11,6 +11,7 @@ from impact_eval import runinfo
 from impact_eval.csvio import EpisodeLog
 from impact_eval.prepare import Plan
 from impact_eval.report import EPISODES_CSV, write_report
+from impact_eval.spec import SPEC_FORMAT
 from impact_eval.sweep import plan_tasks, run_sweep
 
 
@@ -27,18 +28,21 @@ class Result:
 def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict:
     """Initial ``run.json`` content; earlier invocations of a resumed run are kept."""
     cfg = plan.config
+    spec = cfg.spec
     previous = plan.previous_run or {}
     return {
         "command": command,
-        "args": {
+        "spec_format": SPEC_FORMAT,
+        "spec": spec.to_json(),
+        "args": {  # the invocation's own arguments, and the keys older readers look up
             **{k: str(v) if isinstance(v, Path) else v for k, v in args.items()},
-            "env": cfg.env_id,
+            "env": spec.env_id,
             "param_name": cfg.param_name,
-            "values": list(cfg.values),
-            "bin_highs": list(cfg.bin_highs),
-            "methods": list(cfg.methods),
-            "controller_overrides": list(cfg.controller_overrides),
-            "robot_overrides": list(cfg.robot_overrides),
+            "values": list(spec.values),
+            "bin_highs": list(spec.bin_highs),
+            "methods": list(spec.methods),
+            "controller_overrides": list(spec.controller_overrides),
+            "robot_overrides": list(spec.robot_overrides),
             "method_controllers": plan.identity.method_controllers,
         },
         "env": {
@@ -49,9 +53,10 @@ def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict
             "max_episode_steps": plan.env.max_episode_steps,
             "spec": json.loads(plan.env.spec_json),
         },
-        "sweep": asdict(cfg),
+        "run_options": {k: str(v) if isinstance(v, Path) else v
+                        for k, v in asdict(cfg.options).items()},
         "versions": runinfo.package_versions(),
-        "git": runinfo.git_state(),
+        "git": previous.get("git") or runinfo.git_state(),  # the code that wrote the first rows
         "host": runinfo.host_info(),
         "invocations": previous.get("invocations", []),
     }
@@ -65,6 +70,7 @@ def execute(plan: Plan, command: list[str], args: dict[str, object]) -> Result:
         "started_utc": runinfo.utc_now(),
         "resume": bool(plan.done),
         "episodes_already_done": len(plan.done),
+        "git": runinfo.git_state(),
         "status": "running",
     }
     record["invocations"].append(invocation)

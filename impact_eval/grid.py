@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 
 GRID_DECIMALS = 10
 """Grid values are rounded to this many decimals so ``0.1 + 3*0.5`` prints as ``1.6``."""

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from impact_eval.metrics import SUSTAINED_PEAK_COLUMN
-from impact_eval.plots import (
+from impact_eval.plot_style import (
     LINESTYLES,
     MARKERS,
     method_colors,

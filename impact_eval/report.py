@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.metrics import (
     ADDED_COLUMNS,
     EPISODE_COLUMNS,

@@ -31,7 +31,8 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.runinfo import cpu_info
 from impact_eval.csvio import encode_rows, file_columns, older_columns_missing, read_rows, row_key
 from impact_eval.grid import format_value
 from impact_eval.report import FLOAT_COLUMNS
@@ -55,7 +56,8 @@ from impact_eval.reproduce_manifest import (
     sha256,
     table_entry,
 )
-from impact_eval.runinfo import IDENTITY_JSON, RUN_JSON, cpu_info, package_versions
+from impact_eval.runinfo import IDENTITY_JSON, RUN_JSON, package_versions
+from impact_eval.sweep_command import _Parser, run_sweep_command
 
 RESULTS = Path(__file__).resolve().parent.parent / "results"
 PROG = "impact-eval reproduce"
@@ -73,7 +75,7 @@ def parse_cells(spec: str, args: dict) -> set[Cell]:
         raise InvalidArgumentError(f"--cells {spec!r} names no cell; valid: {valid}")
     cells = set()
     for item in items:
-        method, sep, value = item.partition("@")
+        method, sep, value = item.rpartition("@")  # a composed method may hold an @
         try:
             text = format_value(float(value))
         except ValueError:
@@ -112,8 +114,6 @@ def _positive_int(text: str) -> int:
 
 def parser() -> argparse.ArgumentParser:
     """Parser of ``impact-eval reproduce``."""
-    from impact_eval.cli import _Parser
-
     p = _Parser(prog=PROG, description=__doc__.splitlines()[0])
     p.add_argument("tables", nargs="*", metavar="TABLE", help="table name (a results/ directory)")
     p.add_argument("--check", action="store_true", help="rerun and compare with the committed rows")
@@ -146,7 +146,6 @@ def rerun(table: Table, cells: set[Cell] | None, a: argparse.Namespace, out: Pat
           kept: bool) -> int:
     """Rerun ``table`` (or its ``cells``) into ``out``; print the comparison; exit code. On an
     error, whatever this call created is removed."""
-    from impact_eval.cli import run_sweep_command
     from impact_eval.prepare import check_out_dir
 
     check_out_dir(out)

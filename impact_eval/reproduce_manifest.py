@@ -16,9 +16,10 @@ from collections.abc import Sequence
 from pathlib import Path, PurePosixPath
 from typing import NamedTuple
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.csvio import read_rows
 from impact_eval.runinfo import RUN_JSON, read_run_json
+from impact_eval.spec import SweepSpec
 
 MANIFEST = "manifest.json"
 MANIFEST_FORMAT = 1
@@ -42,8 +43,13 @@ def sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def sweep_argv(args: dict) -> list[str]:
-    """The impact-eval arguments that define a table's rows (no output or executor options)."""
+def sweep_argv(run: dict) -> list[str]:
+    """The impact-eval arguments that define a table's rows (no output or executor options):
+    from run.json's ``"spec"`` (``SweepSpec.to_argv``), or for a run recorded before it from
+    its ``"args"``."""
+    if "spec" in run:
+        return SweepSpec.from_json(run["spec"]).to_argv()
+    args = run["args"]
     values = (["--mass-bins", args["mass_bins"]] if args.get("mass_bins")
               else ["--param-values", args["grid"]])
     argv = ["--env", args["env"], "--method", ",".join(args["methods"]), *values,
@@ -182,7 +188,7 @@ def record(results: Path, tables: Sequence[str]) -> dict:
         if not csv_path.is_file():
             raise InvalidArgumentError(f"{directory} has no {EPISODES_CSV}")
         try:
-            sweep_args = sweep_argv(run["args"])
+            sweep_args = sweep_argv(run)
         except (KeyError, TypeError) as exc:
             raise InvalidArgumentError(f"{directory / RUN_JSON} is damaged (args: {exc})") from None
         host = run.get("host") if isinstance(run.get("host"), dict) else {}

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impact_envs.errors import SimulationError
-from impact_envs.policies.interface import FinishingPolicy, Policy, SeededPolicy, stack_obs
+from impact_control.errors import SimulationError
+from impact_control.policy import FinishingPolicy, Policy, SeededPolicy, stack_obs
 from impact_eval.metrics import EpisodeTracker
 
 

@@ -4,15 +4,13 @@ from __future__ import annotations
 
 import json
 import os
-import platform
 import subprocess
-import sys
 from dataclasses import asdict, dataclass, field
-from datetime import datetime, timezone
-from importlib import metadata
 from pathlib import Path
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.runinfo import host_info, utc_now  # noqa: F401 - run.json fields, re-exported
+from impact_control.runinfo import package_versions as control_package_versions
 
 RUN_JSON = "run.json"
 IDENTITY_JSON = "identity.json"
@@ -35,17 +33,7 @@ PACKAGES = (
 
 def package_versions() -> dict[str, str | None]:
     """Installed version of each of ``PACKAGES`` (``None`` if not installed)."""
-    versions: dict[str, str | None] = {}
-    for name in PACKAGES:
-        try:
-            versions[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            versions[name] = None
-    if versions["impact-robotics"] is None:
-        import impact_envs
-
-        versions["impact-robotics"] = f"{impact_envs.__version__} (source tree)"
-    return versions
+    return control_package_versions(PACKAGES)
 
 
 def git_state() -> dict[str, object]:
@@ -68,37 +56,6 @@ def git_state() -> dict[str, object]:
     sha = git("rev-parse", "HEAD")
     status = git("status", "--porcelain", "--untracked-files=no") if sha else None
     return {"sha": sha, "dirty": None if status is None else bool(status)}
-
-
-def utc_now() -> str:
-    """Current UTC time, ISO 8601 to the second."""
-    return datetime.now(timezone.utc).isoformat(timespec="seconds")
-
-
-def host_info() -> dict[str, object]:
-    """Python, platform, CPU model, widest SIMD and CPU count (context for wall times, and for
-    bytes that differ on another CPU: the compiled kernels and libraries pick their code paths
-    by instruction set, docs/results.md "Reproducibility")."""
-    return {
-        "python": sys.version.split()[0],
-        "platform": platform.platform(),
-        **cpu_info(),
-        "cpu_count": os.cpu_count(),
-    }
-
-
-def cpu_info() -> dict[str, str]:
-    """``cpu_model`` and ``simd`` (avx512 / avx2 / sse4_2 / other) from /proc/cpuinfo."""
-    try:
-        text = Path("/proc/cpuinfo").read_text()
-    except OSError:
-        return {"cpu_model": platform.processor() or "unknown", "simd": "unknown"}
-    fields = {k.strip(): v.strip() for k, v in (line.split(":", 1) for line in
-                                                  text.splitlines()[:40] if ":" in line)}
-    flags = set(fields.get("flags", "").split())
-    simd = next((name for name, flag in (("avx512", "avx512f"), ("avx2", "avx2"),
-                                         ("sse4_2", "sse4_2")) if flag in flags), "other")
-    return {"cpu_model": fields.get("model name", "unknown"), "simd": simd}
 
 
 def _read_object(path: Path) -> dict | None:

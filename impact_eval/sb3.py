@@ -17,7 +17,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from impact_envs.errors import CheckpointError
+from impact_control.errors import CheckpointError
 
 TRUST_SB3_ENV_VAR = "IMPACT_TRUST_SB3"
 """Set to ``1`` (or pass ``impact-eval --trust-sb3``) to allow loading ``sb3:<zip>``: SB3's zip

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_control.errors import ImpactError, InvalidArgumentError
 
 
 def evaluation_entry(results: Path, method: str) -> dict:

@@ -19,7 +19,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from impact_envs.parallel import ray_session, ray_task_options, single_threaded_torch
-from impact_eval.sweep import EpisodeBatch, RowSink, SweepConfig, SweepError, Worker
+from impact_eval.sweep_config import EpisodeBatch, RowSink, SweepConfig, SweepError
+from impact_eval.sweep_worker import Worker
 
 _WORKERS: dict[SweepConfig, Worker] = {}
 """This Ray worker process's ``Worker`` (one sweep at a time; a new sweep replaces it)."""
@@ -41,7 +42,7 @@ def run_task(cfg: SweepConfig, task: EpisodeBatch) -> list[dict[str, object]]:
 
 def run_on_ray(cfg: SweepConfig, tasks: Sequence[EpisodeBatch], sink: RowSink) -> None:
     """Run ``tasks`` on Ray; ``sink(row)`` is called in this process for every episode."""
-    with ray_session(cfg.ray_address) as ray:
+    with ray_session(cfg.options.ray_address) as ray:
         remote = ray.remote(run_task).options(**ray_task_options())
         cfg_ref = ray.put(cfg)
         pending = [remote.remote(cfg_ref, task) for task in tasks]

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.rates import POLICY_HZ
+from impact_control.errors import InvalidArgumentError
+from impact_control.rates import POLICY_HZ
 
 VIDEO_FPS = POLICY_HZ
 """One frame per policy step."""
@@ -42,7 +42,7 @@ def require_video() -> None:
 
 def video_path(root: Path, method: str, param: str, value: str, episode: int) -> Path:
     """``root/<method>/<param>=<value>_ep<episode>.mp4`` (method made file-name safe)."""
-    safe = re.sub(r"[^A-Za-z0-9_.=-]+", "_", method).strip("_")
+    safe = re.sub(r"[^A-Za-z0-9_.=+@-]+", "_", method).strip("_")  # keeps a composition
     return root / safe / f"{param}={value}_ep{episode:03d}.mp4"
 
 

@@ -7,7 +7,7 @@ The paper's Phase B (a load the internal model has met before) as a sweep row
 
 from __future__ import annotations
 
-from impact_envs.policies.interface import Policy
+from impact_control.policy import Policy
 from impact_eval.grid import episode_seed
 from impact_eval.rollout import EpisodeJob, LockstepBatch
 

@@ -36,10 +36,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-from impact_envs.cli import OneLineParser
-from impact_envs.control.controller import CONTROLLERS
-from impact_envs.control.presets import ROBOT_PRESETS, check_robot_preset
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_control.cli import OneLineParser
+from impact_control.controller import CONTROLLERS
+from impact_control.errors import ImpactError, InvalidArgumentError
+from impact_control.presets import ROBOT_PRESETS, check_robot_preset
 from impact_franka import checks
 from impact_franka.checks import MAX_SECONDS, host, number, pose_name
 from impact_franka.commands import run

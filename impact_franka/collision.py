@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 
 EXAMPLE_TORQUE_NM: tuple[float, ...] = (20.0, 20.0, 18.0, 18.0, 16.0, 14.0, 12.0)
 """Joint thresholds [Nm] of libfranka's examples (``setDefaultBehavior``)."""

@@ -75,7 +75,7 @@ def _teach(args: argparse.Namespace, robot: object, controller: object) -> int:
     the TCP pose (our model's, from the measured ``q``) under ``--name``."""
     import numpy as np
 
-    from impact_envs.control.lie import matrix_to_quat
+    from impact_control.lie import matrix_to_quat
     from impact_franka.fci import reading
     from impact_franka.poses import save_pose
     from impact_franka.runner import hold
@@ -103,7 +103,7 @@ def _pick_place(args: argparse.Namespace, targets: dict[str, Pose], robot: objec
     step's description or "")."""
     import numpy as np
 
-    from impact_envs.control.lie import matrix_to_quat
+    from impact_control.lie import matrix_to_quat
     from impact_franka.fci import reading
     from impact_franka.gripper import GripperCommand, GripperProcess
     from impact_franka.pick_place import GRIPPER_STEPS, PickPlacePlan, PickPlaceTarget

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from impact_envs.rates import POLICY_HZ
+from impact_control.rates import POLICY_HZ
 
 
 class CirclePolicy:

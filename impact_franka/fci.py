@@ -15,9 +15,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from impact_envs.control.config import ControllerConfig, libfranka_limits
-from impact_envs.control.limits import LimitsConfig
-from impact_envs.errors import ImpactError, check_choice
+from impact_control.config import ControllerConfig, libfranka_limits
+from impact_control.errors import ImpactError, check_choice
+from impact_control.limits import LimitsConfig
 
 TORQUE_SOURCES: tuple[str, ...] = ("tau_J", "tau_J+g")
 """What the controller reads as the measured joint torque: ``tau_J`` (an FR3: link-side,

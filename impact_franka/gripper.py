@@ -15,7 +15,7 @@ import multiprocessing as mp
 import os
 from typing import Any, NamedTuple
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_franka.fci import FrankaError
 
 CONNECT_TIMEOUT_S = 30.0

@@ -18,7 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from impact_envs.control.arm_model import ArmDynamics
+from impact_control.arm_model import ArmDynamics
 
 GRAVITY_EARTH = (0.0, 0.0, -9.81)
 """Gravity [m/s^2] in the robot's base frame, written to the state's ``O_ddP_O``."""
@@ -97,7 +97,7 @@ class FrankaModelArm:
         model: ``pylibfranka.Robot.load_model()``.
         state: A ``RobotState`` of this robot (its load and frames are used; ``q``, ``dq``
             and ``O_ddP_O`` are overwritten on every ``update``).
-        kinematics: Our model (``impact_envs.robot.dynamics.PinocchioArm``).
+        kinematics: Our model (``impact_control.dynamics.PinocchioArm``).
     """
 
     def __init__(self, model: object, state: object, kinematics: ArmDynamics) -> None:

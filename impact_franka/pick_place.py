@@ -18,8 +18,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from impact_envs.control.lie import slerp
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.lie import slerp
 from impact_franka.fci import FciReading
 from impact_franka.gripper import GripperCommand, GripperProcess
 

@@ -32,9 +32,9 @@ from typing import Any
 
 import numpy as np
 
-from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.rates import POLICY_HZ
+from impact_control.errors import InvalidArgumentError
+from impact_control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
+from impact_control.rates import POLICY_HZ
 from impact_franka.fci import FciReading, FrankaError
 from impact_franka.gripper import CHILD_NICE
 
@@ -45,7 +45,7 @@ START_TIMEOUT_S = 120.0
 def _child(conn: Any, make_policy: Callable[[], Any], extra_obs: Callable[[], dict] | None,
            gripper_host: str | None) -> None:
     """The policy process: build, answer observations with actions, drive the gripper."""
-    from impact_envs.policies.interface import stack_obs
+    from impact_control.policy import stack_obs
 
     os.nice(CHILD_NICE)  # the loop wins the CPU over inference
     policy = make_policy()

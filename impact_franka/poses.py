@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_franka.fci import FrankaError
 from impact_franka.pick_place import Pose
 

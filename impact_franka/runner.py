@@ -22,9 +22,9 @@ from typing import NamedTuple, Protocol
 import numpy as np
 import pandas as pd
 
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.lie import matrix_to_quat
-from impact_envs.control.limits import (
+from impact_control.controller import ImpactController
+from impact_control.lie import matrix_to_quat
+from impact_control.limits import (
     LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S,
     limit_rate_libfranka_kernel,
 )

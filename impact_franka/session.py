@@ -34,9 +34,9 @@ def print_report(report: object) -> None:
 
 def make_controller(args: argparse.Namespace, robot: object) -> tuple[object, dict]:
     """The controller for ``args`` and what was set up: collision thresholds, model check."""
-    from impact_envs.control.controller import ImpactController
-    from impact_envs.control.presets import preset_config
-    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_control.controller import ImpactController
+    from impact_control.dynamics import PinocchioArm
+    from impact_control.presets import preset_config
     from impact_franka.collision import collision_thresholds
     from impact_franka.fci import fr3_config
     from impact_franka.model import FrankaModelArm, compare_models
@@ -73,7 +73,7 @@ def write_outputs(args: argparse.Namespace, report: object, setup: dict) -> None
 
 
 def _write(args: argparse.Namespace, report: object, setup: dict, out: Path) -> None:
-    from impact_eval.runinfo import host_info, package_versions, utc_now
+    from impact_control.runinfo import host_info, package_versions, utc_now
     from impact_franka.figures import plot_ticks
 
     report.ticks_table.to_csv(out / "ticks.csv", index=False, float_format="%.9g")

@@ -27,8 +27,8 @@ import gymnasium as gym
 from tqdm import tqdm
 
 import impact_envs
-from impact_envs.cli import OneLineParser
-from impact_envs.errors import ImpactError
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError
 from impact_learn.collect_config import CollectConfig, parse_param_spec
 from impact_learn.collect_pixels import (
     add_observation_arguments,

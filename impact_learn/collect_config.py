@@ -5,9 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from impact_envs.control.controller import CONTROLLERS
+from impact_control.controller import CONTROLLERS
+from impact_control.errors import InvalidArgumentError, check_choice
 from impact_envs.envs.options import ObservationOptions
-from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.parallel import check_executor
 
 COMPENSATIONS = ("none", "closed_loop", "privileged")

@@ -19,9 +19,9 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from impact_control.errors import InvalidArgumentError
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.envs.pixels import PixelObservations
-from impact_envs.errors import InvalidArgumentError
 from impact_learn.dataset import FieldDims, ImageSpec
 
 

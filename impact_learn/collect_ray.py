@@ -16,7 +16,7 @@ from collections.abc import Callable, Generator, Iterator
 
 import gymnasium as gym
 
-from impact_envs.errors import ImpactError
+from impact_control.errors import ImpactError
 from impact_envs.parallel import ray_session, ray_task_options, single_threaded_torch
 from impact_learn.collect_config import CollectConfig
 from impact_learn.collect_run import AttemptBatch, AttemptSpec, EpisodeResult, Expert, run_attempts

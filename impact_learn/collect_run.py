@@ -9,7 +9,7 @@ from typing import Protocol
 import gymnasium as gym
 import numpy as np
 
-from impact_envs.policies.interface import stack_obs
+from impact_control.policy import stack_obs
 from impact_learn.collect_config import CollectConfig
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import zarr
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_learn.collect_config import CollectConfig
 from impact_learn.dataset import FieldDims, ReplayWriter
 

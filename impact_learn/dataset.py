@@ -32,7 +32,7 @@ import numpy as np
 import zarr
 from zarr.codecs import ZstdCodec
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_learn.replay_data import ReplayData, checked_layout, load_replay  # noqa: F401
 from impact_learn.store_check import ScanResult, StoreLayout, scan_store, store_layout
 from impact_learn.store_checksums import Checksums, DamagedStoreError

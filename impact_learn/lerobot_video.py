@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from impact_envs.errors import ImpactError, InvalidArgumentError
-from impact_envs.rates import POLICY_HZ
+from impact_control.errors import ImpactError, InvalidArgumentError
+from impact_control.rates import POLICY_HZ
 
 
 @dataclass(frozen=True)

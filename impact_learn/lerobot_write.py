@@ -10,7 +10,7 @@ import numpy as np
 import zarr
 
 from impact_learn.dataset import ACTION_KEY
-from impact_learn.lerobot_export import (
+from impact_learn.lerobot_layout import (
     CHUNKS_SIZE,
     CODEBASE_VERSION,
     DATA_PATH,
@@ -30,7 +30,7 @@ def _pa():  # noqa: ANN202 - pyarrow is an optional dependency
         import pyarrow as pa
         import pyarrow.parquet as pq
     except ImportError:
-        from impact_envs.errors import InvalidArgumentError
+        from impact_control.errors import InvalidArgumentError
 
         raise InvalidArgumentError(
             "the LeRobot export needs pyarrow; valid: pip install 'impact-robotics[lerobot]'"

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_learn.store_check import StoreLayout, open_store, scan_store, store_layout
 from impact_learn.store_checksums import DamagedStoreError
 from impact_learn.store_format import ACTION_DIM, ACTION_KEY, CHECKSUM_ATTR, META_DTYPES

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import zarr
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_learn.store_checksums import ArraySums, Checksums, DamagedStoreError, digest
 from impact_learn.store_format import CHECKSUM_ATTR, REQUIRED_ARRAYS
 

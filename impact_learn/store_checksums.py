@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_learn.store_format import CHECKSUM_ATTR
 
 ALGORITHM = "sha256-128"

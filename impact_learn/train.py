@@ -23,8 +23,8 @@ from pathlib import Path
 
 import torch
 
-from impact_envs.cli import OneLineParser
-from impact_envs.errors import ImpactError, InvalidArgumentError, TrainingError
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError, InvalidArgumentError, TrainingError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.model import diffusion_loss, encode, make_network
 from impact_envs.policies.diffusion.normalizer import Normalizer

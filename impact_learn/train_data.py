@@ -10,7 +10,7 @@ import numpy as np
 import torch
 from diffusers import DDPMScheduler
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.model import make_train_scheduler
 from impact_envs.policies.diffusion.normalizer import ACTION_POS, Normalizer

@@ -15,7 +15,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_learn.train_state import STATE_FILE, find_train_state
 

@@ -20,7 +20,7 @@ from typing import Any
 import torch
 from safetensors.torch import load_file, save_file
 
-from impact_envs.errors import CheckpointError
+from impact_control.errors import CheckpointError
 from impact_envs.policies.diffusion.model import DiffusionNet
 from impact_learn.ema import EMA
 

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from impact_envs.errors import ImpactError
-from impact_learn.lerobot_export import (
+from impact_control.errors import ImpactError
+from impact_learn.lerobot_layout import (
     ACTION_NAMES,
     ENV_STATE_FEATURE,
     IMAGE_FEATURE_PREFIX,

@@ -14,8 +14,8 @@ from dataclasses import dataclass, fields
 from lerobot.configs.types import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.rates import POLICY_HZ
+from impact_control.errors import InvalidArgumentError
+from impact_control.rates import POLICY_HZ
 from impact_lerobot.features import observation_plan
 from impact_lerobot.settings import PluginSettings
 

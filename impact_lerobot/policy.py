@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from impact_envs.errors import CheckpointError
+from impact_control.errors import CheckpointError
 from impact_lerobot.features import ObservationPlan, observation_plan
 from impact_lerobot.settings import ENV_NAMESPACE, PluginSettings
 

@@ -12,10 +12,10 @@ import math
 from dataclasses import dataclass
 from numbers import Real
 
+from impact_control.controller import CONTROLLERS
+from impact_control.errors import InvalidArgumentError, check_choice
+from impact_control.presets import PRESETS
 from impact_envs import ENV_IDS, ObservationOptions
-from impact_envs.control.controller import CONTROLLERS
-from impact_envs.control.presets import PRESETS
-from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.tasks.base import Task, TaskParam
 from impact_envs.tasks.registry import task_class
 
@@ -47,7 +47,7 @@ class PluginSettings:
     Attributes:
         task: One of ``TASKS`` (``Hammer-v0`` runs ``IMPACT/Hammer-v0``).
         controller: ``impact`` (IMPACT) or ``impedance`` (the plain impedance baseline).
-        controller_preset: One of ``impact_envs.control.presets.PRESETS``.
+        controller_preset: One of ``impact_control.presets.PRESETS``.
         object_mass: The mass [kg] of every episode (the task's ``mass_param``); None: the
             task's default, unless ``mass_bin`` is given.
         mass_bin: ``(lo, hi)`` [kg]: each episode draws its mass uniformly in ``[lo, hi)``

@@ -24,13 +24,14 @@ import numpy as np
 from robosuite.controllers.parts.controller import Controller
 from scipy.spatial.transform import Rotation
 
-from impact_envs.control.config import ControllerConfig
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.limits import LIBFRANKA_DELTA_T_S
-from impact_envs.control.presets import preset_config
-from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_control.config import ControllerConfig
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError, check_choice
+from impact_control.limits import LIBFRANKA_DELTA_T_S
+from impact_control.presets import preset_config
 from impact_envs.robot.mujoco_arm import MujocoArm
 from impact_envs.robot.noise import SensorNoise
+from impact_envs.torch_threads import limit_torch_threads
 from impact_robosuite.sensing import ArmSensors
 
 OUTPUT_MAX = (0.05, 0.05, 0.05, 0.5, 0.5, 0.5)
@@ -97,6 +98,7 @@ class ImpactArmController(Controller):
         self.goal_update_mode = options.goal_update_mode
         config = preset_at_timestep(options.preset, float(model.opt.timestep))
         self.arm_model = MujocoArm(model, self.joint_names, ref_name, sim.data.qpos.copy())
+        limit_torch_threads()
         self.core = ImpactController(self.arm_model, config, options.mode)
         noise = SensorNoise() if options.sensor_noise else SensorNoise.off()
         self.sensors = ArmSensors(model, self.qpos_index, self.qvel_index, noise,

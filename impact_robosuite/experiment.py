@@ -17,8 +17,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from impact_envs.cli import OneLineParser
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError, InvalidArgumentError
 
 COLUMNS = ("task", "method", "mass_kg", "seed", "success", "max_lift_m", "final_lift_m", "steps")
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from robosuite.controllers.parts import controller_factory
 
-from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_control.errors import InvalidArgumentError, check_choice
 from impact_robosuite.arm_controller import ArmOptions, ImpactArmController
 
 CONTROLLER_TYPES = {"IMPACT": "impact", "IMPACT_IMPEDANCE": "impedance"}

@@ -51,8 +51,8 @@ class Plan:
 SYNOPSIS = "impact-eval --env IMPACT/Hammer-v0 \\\n    --method scripted,scripted_impact,vanilla_dp"
 
 PLANS = (
-    Plan("pip install -e . && impact-eval --quick --out results/quickstart",
-         substitutions=(("pip install torch==2.13.0 && pip install -e . && ", ""),),
+    Plan('pip install -e ".[bench]" && impact-eval --quick --out results/quickstart',
+         substitutions=(('pip install torch==2.13.0 && pip install -e ".[bench]" && ', ""),),
          expect=("impact-eval: 80 episodes run",), slow=True),
     Plan('pip install -e ".[dev]" && python -m pytest -n 2',
          skip="installs packages and runs the whole suite, which holds this test"),

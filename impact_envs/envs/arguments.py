@@ -8,11 +8,11 @@ import importlib
 from collections.abc import Mapping
 from typing import TypeVar
 
-from impact_envs.control.config import ControllerConfig
-from impact_envs.control.controller import CONTROLLERS
-from impact_envs.control.presets import PRESETS, preset_config, preset_name
+from impact_control.config import ControllerConfig
+from impact_control.controller import CONTROLLERS
+from impact_control.errors import InvalidArgumentError, check_choice
+from impact_control.presets import PRESETS, preset_config, preset_name
 from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
-from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.tasks.base import Task
 
 Options = TypeVar("Options", RobotOptions, RenderOptions, ObservationOptions)

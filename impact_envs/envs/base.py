@@ -17,11 +17,13 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
+from impact_control.config import ControllerConfig
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError
+from impact_control.internal_model import ModelSnapshot
+from impact_control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
+from impact_control.rates import CONTROL_HZ, POLICY_HZ
 from impact_envs._gl import make_renderer
-from impact_envs.control.config import ControllerConfig
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.internal_model import ModelSnapshot
-from impact_envs.control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
 from impact_envs.envs.arguments import (
     check_args,
     controller_config,
@@ -35,10 +37,9 @@ from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOpt
 from impact_envs.envs.pixels import PixelObservations, check_view
 from impact_envs.envs.robot_parts import build_robot
 from impact_envs.envs.state import EnvState, capture, restore
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import ClosedLoop, TickTargets
-from impact_envs.rates import CONTROL_HZ, POLICY_HZ
 from impact_envs.tasks.base import Task, refresh_constants
+from impact_envs.torch_threads import limit_torch_threads
 
 
 def ticks_for_step(k: int) -> int:
@@ -91,6 +92,7 @@ class ImpactEnv(gym.Env):
         self._params = initial_params(task, object_mass, task_params)
         cfg, self.controller_preset = controller_config(controller_preset)
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
+        limit_torch_threads()
         self.controller = ImpactController(self.dynamics, cfg, mode=controller)
         self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
                                task.before_tick if task.has_tick_hook else None,

@@ -21,17 +21,15 @@ env sets (the TCP's start pose), which is what a fresh filter starts from. The a
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from impact_envs.control.internal_model import ModelSnapshot
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError
+from impact_control.internal_model import ModelSnapshot
+from impact_envs.envs.env_parts import EnvParts
 from impact_envs.envs.state import _shape_errors, state_identity
-from impact_envs.errors import InvalidArgumentError
-
-if TYPE_CHECKING:
-    from impact_envs.control.controller import ImpactController
-    from impact_envs.envs.base import ImpactEnv
 
 EPISODE_VIEWS = ("target_filter",)
 """Controller state the env sets per episode: kept as ``controller.reset`` left it when a
@@ -57,7 +55,7 @@ def episode_views(controller: ImpactController) -> dict[str, np.ndarray]:
     return {"target_filter": controller.optional.target_filter.packed.buffer}
 
 
-def controller_carry(env: ImpactEnv) -> ControllerCarry:
+def controller_carry(env: EnvParts) -> ControllerCarry:
     """A copy of ``env``'s controller state now (e.g. at the end of an episode)."""
     ctrl = env.controller
     return ControllerCarry(
@@ -67,7 +65,7 @@ def controller_carry(env: ImpactEnv) -> ControllerCarry:
         identity=state_identity(env))
 
 
-def check_carry(env: ImpactEnv, carry: object) -> None:
+def check_carry(env: EnvParts, carry: object) -> None:
     """One-line ``InvalidArgumentError`` unless ``carry`` was taken from an env like ``env``
     (same identity: class, task, controller mode, preset, configuration, torque reading; the
     same arrays)."""
@@ -90,7 +88,7 @@ def check_carry(env: ImpactEnv, carry: object) -> None:
                                    f"{errors[0]}")
 
 
-def apply_carry(env: ImpactEnv, carry: ControllerCarry) -> None:
+def apply_carry(env: EnvParts, carry: ControllerCarry) -> None:
     """After ``controller.reset``: overwrite the controller's state with ``carry``'s, except
     ``EPISODE_VIEWS`` (kept as the reset left them)."""
     ctrl = env.controller

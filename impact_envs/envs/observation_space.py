@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from gymnasium import spaces
 
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.robot.dynamics import PinocchioArm
+from impact_control.dynamics import PinocchioArm
+from impact_control.errors import InvalidArgumentError
 from impact_envs.tasks.base import ObsEntry, Task
 
 ROBOT_OBSERVATIONS = (

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, fields, replace
 from numbers import Integral, Real
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.robot.hand import HANDS, check_grasp_force, check_hand
 from impact_envs.robot.realism import REALISMS as REALISMS  # re-exported
 from impact_envs.robot.realism import Realism
@@ -132,7 +132,8 @@ class RobotOptions:
 class RenderOptions:
     """Offscreen rendering (``render_mode="rgb_array"``): image size [px] and camera name
     (``"overview"``, which frames the arm, the objects and the goal, ``"front"`` or ``"side"``,
-    defined in assets/common.xml, or ``"wrist"`` on the hand, assets/fr3_hand.xml)."""
+    defined in assets/common.xml, or ``"wrist"`` on the hand,
+    impact_control/assets/fr3_hand.xml)."""
 
     width: int = 320
     height: int = 240
@@ -162,7 +163,7 @@ class ObservationOptions:
         obs_mode: One of ``OBS_MODES``.
         cameras: Camera names rendered in the image modes, one image per camera and mode
             (``"overview"``, ``"front"``, ``"side"`` in assets/common.xml, ``"wrist"`` on the
-            hand in assets/fr3_hand.xml); ignored in ``"state"`` mode.
+            hand in impact_control/assets/fr3_hand.xml); ignored in ``"state"`` mode.
         image_width, image_height: Image size [px] (at most the scene's 640x480 buffer).
         shadows: Draw shadows (as ``render()`` does). On a CPU renderer they are most of the
             cost of an image (``impact-bench --pixels``, docs/envs.md).

@@ -17,9 +17,9 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
+from impact_control.errors import InvalidArgumentError, check_choice
 from impact_envs._gl import check_rendering, make_renderer
 from impact_envs.envs.options import ObservationOptions
-from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.tasks.base import Task
 
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import NamedTuple
 
+from impact_control.dynamics import ModelPerturbation, PinocchioArm
 from impact_envs.envs.options import RobotOptions
-from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
 from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.realism import Realism
 from impact_envs.robot.sim import FrankaSim

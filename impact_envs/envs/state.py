@@ -11,16 +11,13 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import mujoco
 import numpy as np
-import torch
 
-from impact_envs.errors import InvalidArgumentError
-
-if TYPE_CHECKING:
-    from impact_envs.envs.base import ImpactEnv
+from impact_control.errors import InvalidArgumentError
+from impact_envs.envs.env_parts import EnvParts
 
 ENV_FIELDS = ("_params", "_episode_params", "_target_pos", "_target_quat", "_gripper_cmd",
               "_step_count", "_success_once", "_q_meas", "_dq_meas", "_warm", "_carry")
@@ -34,7 +31,7 @@ class EnvState:
     model: mujoco.MjModel
     data: mujoco.MjData
     arrays: dict[str, np.ndarray]
-    weights: dict[str, torch.Tensor]
+    weights: dict[str, np.ndarray]
     learner: dict[str, Any]
     task: dict[str, Any]
     env: dict[str, Any]
@@ -43,7 +40,7 @@ class EnvState:
     """What the state belongs to (``state_identity``): ``set_state`` refuses another."""
 
 
-def state_identity(env: ImpactEnv) -> dict[str, str]:
+def state_identity(env: EnvParts) -> dict[str, str]:
     """Env class, task, controller mode, preset, the full controller configuration and the
     torque reading (``RobotOptions.torque_reading``: a link-side state carries a sensor bias
     and estimator filters that a commanded reading would continue wrongly, and vice versa)."""
@@ -67,7 +64,7 @@ def _shape_errors(expected: dict[str, Any], given: object, what: str) -> list[st
     return errors
 
 
-def check_state(env: ImpactEnv, state: object) -> None:
+def check_state(env: EnvParts, state: object) -> None:
     """``InvalidArgumentError`` (one line) unless ``state`` is a snapshot of an env like
     ``env``: same identity, and every array of the same name, shape and dtype."""
     if not isinstance(state, EnvState):
@@ -111,7 +108,7 @@ def _model_arrays(model: object) -> dict[str, np.ndarray]:
     return arrays
 
 
-def _live_arrays(env: ImpactEnv) -> dict[str, np.ndarray]:
+def _live_arrays(env: EnvParts) -> dict[str, np.ndarray]:
     """Every array (by name) whose contents carry state between ticks, as the live objects:
     what the controller, the simulator and the arm model each declare (``state_arrays``)."""
     return {**{f"controller.{k}": v for k, v in env.controller.state_arrays().items()},
@@ -126,14 +123,14 @@ def _copy_model(dst: mujoco.MjModel, src: mujoco.MjModel) -> None:
         np.copyto(getattr(dst, name), value)
 
 
-def capture(env: ImpactEnv) -> EnvState:
+def capture(env: EnvParts) -> EnvState:
     """A deep copy of ``env``'s episode state."""
     im = env.controller.internal_model
     return EnvState(
         model=copy.deepcopy(env.sim.model),
         data=copy.deepcopy(env.sim.data),
         arrays={k: v.copy() for k, v in _live_arrays(env).items()},
-        weights={k: v.detach().clone() for k, v in im.net.state_dict().items()},
+        weights={k: v.copy() for k, v in im.net.state_dict().items()},
         learner=env.controller.python_state(),
         task=copy.deepcopy(env.task.__dict__),
         env=copy.deepcopy({k: getattr(env, k, None) for k in ENV_FIELDS}),
@@ -142,7 +139,7 @@ def capture(env: ImpactEnv) -> EnvState:
     )
 
 
-def restore(env: ImpactEnv, state: EnvState) -> None:
+def restore(env: EnvParts, state: EnvState) -> None:
     """Write ``state`` into ``env`` in place (an env of the same task and settings).
 
     Everything is checked first (``check_state``): a refused state leaves ``env`` as it was.
@@ -155,9 +152,7 @@ def restore(env: ImpactEnv, state: EnvState) -> None:
         np.copyto(live, state.arrays[name])
     ctrl = env.controller
     im = ctrl.internal_model
-    with torch.no_grad():
-        for name, tensor in im.net.state_dict().items():
-            tensor.copy_(state.weights[name])
+    im.net.load_state_dict(state.weights)
     ctrl.load_python_state(state.learner)
     env.task.__dict__.update(copy.deepcopy(state.task))
     for key, value in copy.deepcopy(state.env).items():

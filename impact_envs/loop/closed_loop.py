@@ -15,12 +15,12 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from impact_envs.control.arm_model import dynamics_arrays
-from impact_envs.control.controller import ImpactController, describe_bad_input
-from impact_envs.control.kernels import BAD_INPUT
-from impact_envs.errors import SimulationError
+from impact_control.arm_model import dynamics_arrays
+from impact_control.controller import ImpactController, describe_bad_input
+from impact_control.dynamics import PinocchioArm
+from impact_control.errors import SimulationError
+from impact_control.kernels import BAD_INPUT
 from impact_envs.loop.tick import ArmArrays, StepPlan, bundle_tick_args, bundled_tick
-from impact_envs.robot.dynamics import PinocchioArm
 from impact_envs.robot.sim import FrankaSim
 
 CONTACT_EVERY = 4

@@ -2,7 +2,7 @@
 
 The data crosses as named structures: ``StepPlan`` (this step's targets, noise draws and
 records), ``SimArrays`` (the simulator's views, ``robot/sim.py``), ``ArmArrays`` (the arm
-model, ``robot/chain_dynamics.py``), ``DynamicsArrays`` and ``ControllerState`` (the
+model, ``impact_control/chain_dynamics.py``), ``DynamicsArrays`` and ``ControllerState`` (the
 controller's, ``control/``). ``bundle_tick_args`` gathers them once per policy step into one
 ``TickArgs`` (a numba structref), so each tick's call (``bundled_tick``) crosses one pointer
 instead of unboxing some 60 arrays (measured by ``impact_eval.experiments.crossing_cost``).
@@ -17,7 +17,8 @@ import numpy as np
 from numba import njit, types
 from numba.experimental import structref
 
-from impact_envs.control.kernels import (
+from impact_control.chain_dynamics import chain_terms
+from impact_control.kernels import (
     BAD_INPUT,
     BAD_QUAT,
     NON_FINITE,
@@ -25,7 +26,6 @@ from impact_envs.control.kernels import (
     first_bad_input,
     unpack_limiter,
 )
-from impact_envs.robot.chain_dynamics import chain_terms
 from impact_envs.robot.sim_kernels import send, sense
 
 

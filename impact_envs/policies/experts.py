@@ -12,8 +12,8 @@ from importlib import import_module
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.policies.interface import Policy
+from impact_control.errors import InvalidArgumentError
+from impact_control.policy import Policy
 
 ExpertFactory = Callable[[str], Policy]
 """``factory(compensation) -> Policy`` (``compensation``: ``scripted.COMPENSATIONS``)."""
@@ -72,7 +72,7 @@ def check_expert_obs(obs: object, keys: Sequence[str], n_envs: int, expert: str)
     if not isinstance(obs, Mapping):
         raise InvalidArgumentError(
             f"{expert}.act takes the env's Dict observation batched as {{key: (B, ...)}} "
-            f"(impact_envs.policies.interface.stack_obs), not {type(obs).__name__}")
+            f"(impact_control.policy.stack_obs), not {type(obs).__name__}")
     missing = [k for k in keys if k not in obs]
     if missing:
         raise InvalidArgumentError(
@@ -85,4 +85,4 @@ def check_expert_obs(obs: object, keys: Sequence[str], n_envs: int, expert: str)
             raise InvalidArgumentError(
                 f"{expert}.act: observation {key!r} has shape {shape}; valid: a batch of "
                 f"reset(n_envs)'s {n_envs} rows, (B, ...) with B = {n_envs} "
-                "(impact_envs.policies.interface.stack_obs([obs]) for one env)")
+                "(impact_control.policy.stack_obs([obs]) for one env)")

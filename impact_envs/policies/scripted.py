@@ -27,10 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
-from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_control.errors import InvalidArgumentError, check_choice
+from impact_control.lie import matrix_from_rot6d, rot6d_from_matrix
+from impact_control.rates import POLICY_HZ
 from impact_envs.policies.experts import check_expert_obs
-from impact_envs.rates import POLICY_HZ
 
 GRAVITY = 9.81
 OPEN, CLOSED = -1.0, 1.0

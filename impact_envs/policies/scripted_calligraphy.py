@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.control.lie import rot6d_from_matrix
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.lie import rot6d_from_matrix
+from impact_control.rates import POLICY_HZ
 from impact_envs.policies.experts import check_expert_obs
-from impact_envs.rates import POLICY_HZ
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])
 """TCP pointing down with its x axis along world +x (the home yaw)."""

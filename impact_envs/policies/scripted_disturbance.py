@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.scripted import CARRY, PickPlaceExpert, PickPlaceSpec
 
 NEVER = 10**9

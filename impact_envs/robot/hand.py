@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass
 from numbers import Real
 
-from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_control.errors import InvalidArgumentError, check_choice
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 import mujoco
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 
 FD_STEP = 1e-6
 """Step [s] of the central difference of M along dq (M_dot dq); error ~1e-10 relative."""

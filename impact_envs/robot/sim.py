@@ -16,8 +16,8 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError, SimulationError
-from impact_envs.robot.dynamics import ARM_JOINTS, FINGER_JOINTS
+from impact_control.dynamics import ARM_JOINTS, FINGER_JOINTS
+from impact_control.errors import InvalidArgumentError, SimulationError
 from impact_envs.robot.hand import check_grasp_force, check_hand
 from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.scene import load_scene
@@ -304,7 +304,7 @@ class FrankaSim:
         if not (isinstance(self.arm_qpos, slice) and isinstance(self.arm_dof, slice)):
             raise InvalidArgumentError(
                 "the arm's qpos/qvel are not contiguous in this scene; valid: the seven arm "
-                "joints declared one after another (as in assets/fr3_hand.xml)")
+                "joints declared one after another (as in impact_control/assets/fr3_hand.xml)")
         qpos_arm, qvel_arm, qfrc_actuator, qfrc_damper = self._sensed_views()
         finger_i, finger_j = self._finger_ids
         return SimArrays(self._noise_stds, qpos_arm, qvel_arm, qfrc_actuator, qfrc_damper,

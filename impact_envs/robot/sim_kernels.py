@@ -1,6 +1,6 @@
 """Numba kernels of ``FrankaSim`` (sensing, actuation, state and contact checks).
 
-Compiled once and cached (``impact_envs.jit_cache`` keeps the cache in step); ``FrankaSim``
+Compiled once and cached (``impact_control.jit_cache`` keeps the cache in step); ``FrankaSim``
 and the closed loop's tick (``impact_envs/loop``) call them on views of ``MjData``.
 """
 

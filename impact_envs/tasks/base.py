@@ -19,8 +19,8 @@ from typing import ClassVar
 import mujoco
 import numpy as np
 
-from impact_envs.control.lie import rot6d_from_matrix
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.lie import rot6d_from_matrix
 from impact_envs.robot.sim import FrankaSim
 
 

@@ -14,9 +14,9 @@ from collections.abc import Mapping
 import mujoco
 import numpy as np
 
-from impact_envs.control.lie import matrix_from_rot6d, rot6d_from_matrix
-from impact_envs.rates import POLICY_HZ
-from impact_envs.robot.ik import HOME_Q
+from impact_control.ik import HOME_Q
+from impact_control.lie import matrix_from_rot6d, rot6d_from_matrix
+from impact_control.rates import POLICY_HZ
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import BodyMass, ObsEntry, Task, TaskParam
 from impact_envs.tasks.calligraphy_force import NormalForceCommand

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impact_envs.robot.ik import HOME_Q
+from impact_control.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import (
     OBJECT_POSE,

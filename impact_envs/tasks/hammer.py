@@ -6,7 +6,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from impact_envs.robot.ik import HOME_Q
+from impact_control.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import (
     OBJECT_POSE,

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.tasks.base import Task
 
 TASKS: dict[str, type[Task]] = {}
@@ -38,9 +38,9 @@ def register_task(task_cls: type[Task]) -> str:
 
 
 def task_class(env_id: str) -> type[Task]:
-    """The task registered under ``env_id`` (a one-line error naming the valid ids)."""
-    import impact_envs  # noqa: F401  (registers the built-in tasks)
-
+    """The task registered under ``env_id`` (a one-line error naming the valid ids). The
+    built-in tasks are registered by then: importing this module runs ``impact_envs``'s
+    ``__init__`` first, which registers them."""
     if env_id not in TASKS:
         raise InvalidArgumentError(f"unknown env {env_id!r}; valid: {', '.join(TASKS)}")
     return TASKS[env_id]

@@ -50,13 +50,15 @@ import numpy as np
 import pandas as pd
 
 import impact_envs
-from impact_envs.cli import OneLineParser, add_robot_set
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError, InvalidArgumentError, check_choice
+from impact_control.policy import stack_obs
+from impact_control.rates import POLICY_HZ
+from impact_envs.cli import add_robot_set
 from impact_envs.envs.options import RobotOptions, apply_robot_overrides
-from impact_envs.errors import ImpactError, InvalidArgumentError, check_choice
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 from impact_envs.policies.scripted import PickPlaceExpert
-from impact_envs.rates import POLICY_HZ
+from impact_franka.figures import plot_protocol
 
 PHASES = ("A", "B", "C")
 MAX_TARGET_VZ_M_S = 0.02
@@ -219,52 +221,6 @@ def summarize(metrics: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def plot(df: pd.DataFrame, path: Path) -> list[Path]:
-    """Stacked panels per controller: vertical force signals, gate, vertical pose error."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    controllers = list(dict.fromkeys(df["controller"]))
-    fig, axes = plt.subplots(3, len(controllers), figsize=(6.5 * len(controllers), 7.5),
-                             sharex="col", squeeze=False)
-    for col, controller in enumerate(controllers):
-        d = df[df["controller"] == controller]
-        t = d["t_s"]
-        ax = axes[0, col]
-        ax.plot(t, d["ext_fz"], lw=0.6, alpha=0.5, label="raw estimate ŵ_z")
-        ax.plot(t, d["slow_fz"], lw=1.5, label="slow wrench w_slow,z")
-        ax.plot(t, d["pred_fz"], lw=1.5, ls="--", label="internal model w_pred,z")
-        ax.plot(t, d["imp_fz"] + d["ff_fz"], lw=1.0, label="applied (impedance + ff) z")
-        ax.set_ylabel("vertical force [N]")
-        ax.set_title(f"controller = {controller}")
-        ax.legend(fontsize=7, loc="lower left", ncol=2)  # the phase labels sit at the top
-        axes[1, col].step(t, d["gate_open"].astype(int), where="post", color="tab:red")
-        axes[1, col].set_ylabel("surprise gate open")
-        axes[1, col].set_yticks([0, 1])
-        ax3 = axes[2, col]
-        ax3.plot(t, 100 * d["err_z_m"], lw=1.0, label="vertical error e_z")
-        ax3.plot(t, 100 * d["pose_error_m"], lw=0.6, alpha=0.6, label="|position error|")
-        ax3.axhspan(-1, 1, color="tab:green", alpha=0.12, label="±1 cm")
-        ax3.set_ylabel("TCP error [cm]")
-        ax3.set_xlabel("time [s] (episodes back to back)")
-        ax3.legend(fontsize=7, loc="upper left")
-        for _, ep in d.groupby("episode"):
-            start, end = ep["t_s"].iloc[0], ep["t_s"].iloc[-1]
-            for a in axes[:, col]:
-                a.axvline(start, color="k", lw=0.5, alpha=0.4)
-            axes[0, col].text((start + end) / 2, 0.97, f"Phase {ep['phase'].iloc[0]}",
-                              transform=axes[0, col].get_xaxis_transform(), ha="center",
-                              va="top", fontsize=9, weight="bold")
-    fig.tight_layout()
-    paths = [path.with_suffix(".png"), path.with_suffix(".pdf")]
-    for p in paths:
-        fig.savefig(p, dpi=130)
-    plt.close(fig)
-    return paths
-
-
 def _check_masses(env_id: str, masses: tuple[float, ...]) -> None:
     """One-line ``InvalidArgumentError`` for a mass outside the env's range (before any file)."""
     env = gym.make(env_id)
@@ -309,7 +265,7 @@ def main(argv: list[str] | None = None) -> int:
                         for c in PROTOCOL_CONTROLLERS], ignore_index=True)
         if k == 0:
             df.to_csv(args.out / "timeseries.csv", index=False)
-            figs = plot(df, args.out / "protocol")
+            figs = plot_protocol(df, args.out / "protocol")
         metrics.append(phase_metrics(df).assign(repeat=k, seed=seed))
     table = pd.concat(metrics, ignore_index=True)
     table.to_csv(args.out / "metrics.csv", index=False)

@@ -17,11 +17,11 @@ import timeit
 import numpy as np
 import torch
 
-from impact_envs.control.arm_model import ArmDynamics
-from impact_envs.control.config import ControllerConfig, EstimatorConfig
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.lie import matrix_to_quat
-from impact_envs.robot.dynamics import PinocchioArm
+from impact_control.arm_model import ArmDynamics
+from impact_control.config import ControllerConfig, EstimatorConfig
+from impact_control.controller import ImpactController
+from impact_control.dynamics import PinocchioArm
+from impact_control.lie import matrix_to_quat
 
 Q_BENCH = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
 

@@ -15,7 +15,7 @@ import argparse
 
 import numpy as np
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_learn.store_check import open_store
 
 GRAVITY_M_S2 = 9.81

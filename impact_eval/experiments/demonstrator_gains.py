@@ -17,8 +17,8 @@ import dataclasses
 import gymnasium as gym
 import numpy as np
 
+from impact_control.policy import stack_obs
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 from impact_envs.policies.scripted import CARRY, RETREAT, PickPlaceExpert
 
 

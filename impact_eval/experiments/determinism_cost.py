@@ -17,13 +17,15 @@ from __future__ import annotations
 
 import json
 import statistics
+import tempfile
 import time
 from pathlib import Path
 
-from impact_envs.cli import OneLineParser
-from impact_envs.errors import ImpactError
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError
 from impact_envs.parallel import single_threaded_torch
 from impact_eval.grid import parse_grid
+from impact_eval.spec import RunOptions, SweepSpec
 from impact_eval.sweep import SweepConfig, Worker, plan_tasks
 
 MODES = ("invariant", "batched")
@@ -42,9 +44,10 @@ def sweep_config(env_id: str, methods: tuple[str, ...], values: tuple[float, ...
         info = describe_env(env)
     finally:
         env.close()
-    return SweepConfig(env_id=env_id, canonical_env_id=info.env_id, param_name=info.param_name,
-                       policy_dt=info.policy_dt, methods=methods, values=values, episodes=episodes,
-                       seed=0, workers=1, envs_per_worker=envs_per_worker)
+    spec = SweepSpec(env_id=env_id, methods=methods, values=values, episodes=episodes, seed=0)
+    options = RunOptions(out=Path(tempfile.gettempdir()), envs_per_worker=envs_per_worker)
+    return SweepConfig(spec, options, canonical_env_id=info.env_id, param_name=info.param_name,
+                       policy_dt=info.policy_dt)
 
 
 def run_mode(cfg: SweepConfig, batch_invariant: bool) -> tuple[float, list[dict[str, object]]]:
@@ -52,7 +55,7 @@ def run_mode(cfg: SweepConfig, batch_invariant: bool) -> tuple[float, list[dict[
     worker = Worker(cfg)
     rows: list[dict[str, object]] = []
     tasks = plan_tasks(cfg, set())
-    for method in cfg.methods:  # build policies (and envs) before the clock starts
+    for method in cfg.spec.methods:  # build policies (and envs) before the clock starts
         policy = worker._policy(method)
         if hasattr(policy, "batch_invariant"):
             policy.batch_invariant = batch_invariant  # type: ignore[attr-defined]
@@ -78,8 +81,8 @@ def measure(cfg: SweepConfig, repeats: int) -> dict[str, object]:
             rows[mode].append(json.dumps(result, sort_keys=True, default=str))
             print(f"repeat {i} {mode}: {wall:.1f} s", flush=True)
     ratios = [a / b for a, b in zip(walls["invariant"], walls["batched"], strict=True)]
-    return {"methods": list(cfg.methods), "values": list(cfg.values),
-            "episodes": cfg.episodes, "envs_per_worker": cfg.envs_per_worker,
+    return {"methods": list(cfg.spec.methods), "values": list(cfg.spec.values),
+            "episodes": cfg.spec.episodes, "envs_per_worker": cfg.options.envs_per_worker,
             "walls_s": walls, "ratios_invariant_over_batched": ratios,
             "mean_ratio": statistics.fmean(ratios),
             "rows_identical_across_repeats": {m: len(set(rows[m])) == 1 for m in MODES}}

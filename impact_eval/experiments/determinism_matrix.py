@@ -20,7 +20,7 @@ import sys
 import time
 from pathlib import Path
 
-from impact_envs.cli import OneLineParser
+from impact_control.cli import OneLineParser
 
 SWEEP = ["--env", "IMPACT/Hammer-v0", "--method", "vanilla_dp,augmented_dp,impact,impact_warm",
          "--masses", "0.2,5,10", "--episodes", "5"]

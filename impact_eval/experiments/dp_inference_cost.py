@@ -102,8 +102,8 @@ def measure_env_step(env_id: str, controller: str = "impact", steps: int = 90,
     import gymnasium as gym
 
     import impact_envs  # noqa: F401 - registers the env ids
+    from impact_control.policy import stack_obs
     from impact_envs.policies.experts import make_expert
-    from impact_envs.policies.interface import stack_obs
 
     env = gym.make(env_id, controller=controller)
     expert = make_expert(env_id)

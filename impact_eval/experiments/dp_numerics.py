@@ -28,8 +28,8 @@ from impact_envs.policies.diffusion.policy import DiffusionPolicy
 
 SGD_SNIPPET = """
 import hashlib, numpy as np
-from impact_envs.control.internal_model.model import InternalModel
-from impact_envs.control.internal_model.net import sgd_step
+from impact_control.internal_model.model import InternalModel
+from impact_control.internal_model.net import sgd_step
 rng = np.random.default_rng(0)
 m = InternalModel(); w, b = m._weights, m._biases
 for _ in range(50):
@@ -107,8 +107,8 @@ def sgd_lines() -> list[str]:
         out = subprocess.run([sys.executable, "-c", SGD_SNIPPET], capture_output=True,
                              text=True, env=env, check=True)
         digests[threads] = out.stdout.strip()
-    from impact_envs.control.internal_model.model import InternalModel
-    from impact_envs.control.internal_model.net import sgd_step
+    from impact_control.internal_model.model import InternalModel
+    from impact_control.internal_model.net import sgd_step
 
     rng = np.random.default_rng(0)
     batches = [(rng.standard_normal((16, 768)).astype(np.float32),

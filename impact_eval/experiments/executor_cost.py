@@ -26,8 +26,8 @@ import sys
 import time
 from pathlib import Path
 
-from impact_envs.cli import OneLineParser
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError, InvalidArgumentError
 
 
 def run_once(out: Path, executor: str, sweep: list[str]) -> float:

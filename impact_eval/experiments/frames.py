@@ -17,9 +17,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import impact_envs  # noqa: E402
+from impact_control.policy import stack_obs  # noqa: E402
 from impact_envs.envs.options import RenderOptions  # noqa: E402
 from impact_envs.policies.experts import make_expert  # noqa: E402
-from impact_envs.policies.interface import stack_obs  # noqa: E402
 
 FRACTIONS = (0.0, 0.3, 0.6, 1.0)
 """Where in the episode the four frames are taken."""

@@ -17,7 +17,7 @@ import gymnasium as gym
 import numpy as np
 
 import impact_envs  # noqa: F401 - registers the envs
-from impact_envs.policies.interface import stack_obs
+from impact_control.policy import stack_obs
 from impact_envs.policies.scripted_hammer_basket import hammer_basket_expert
 from impact_envs.tasks.hammer_basket import (
     HANDLE_Y_AT_ORIGIN_M,

@@ -21,15 +21,15 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from impact_control.controller import ImpactController
+from impact_control.dynamics import PinocchioArm
+from impact_control.ik import HOME_Q, solve_ik
+from impact_control.lie import matrix_to_quat, so3_exp
+from impact_control.presets import preset_config
 from impact_envs.cli import add_robot_set
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.lie import matrix_to_quat, so3_exp
-from impact_envs.control.presets import preset_config
 from impact_envs.envs.options import RobotOptions, apply_robot_overrides
 from impact_envs.envs.robot_parts import build_robot
 from impact_envs.loop import control_tick
-from impact_envs.robot.dynamics import PinocchioArm
-from impact_envs.robot.ik import HOME_Q, solve_ik
 from impact_envs.robot.sim import FrankaSim
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])

@@ -25,40 +25,27 @@ model's prediction, 0 here: its feedforward is the payload stage's). Sensor nois
 from __future__ import annotations
 
 import argparse
-import json
 import math
-from collections.abc import Sequence
-from dataclasses import replace
 from pathlib import Path
 
 import mujoco
 import numpy as np
 import pandas as pd
 
-from impact_envs.cli import OneLineParser, add_robot_set
-from impact_envs.control.config import ControllerConfig
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.presets import preset_config
+from impact_control.cli import OneLineParser
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError
+from impact_control.ik import HOME_Q
+from impact_envs.cli import add_robot_set
 from impact_envs.envs.options import RobotOptions, apply_robot_overrides
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import control_tick
-from impact_envs.robot.ik import HOME_Q
 from impact_eval.experiments.physics import Rig
+from impact_eval.experiments.press_modes import TRACES, check_robot_record, mode_controller
+from impact_eval.experiments.press_setdown import run_setdown
 
 MODES = ("impedance", "impact", "impact_unguarded", "paper", "authors_sim")
 SCENARIOS = ("both", "plate", "setdown")
-TRACES = ("failing", "impact", "all", "none")
-"""``--traces``: whose set-down traces are written (``press_setdown.wants_trace``)."""
 GAP_M, APPROACH_S, PLATE_HALF_THICKNESS_M = 0.03, 1.0, 0.02
-
-
-def mode_controller(mode: str) -> tuple[str, ControllerConfig]:
-    """(controller mode, config) of a press mode: its preset as shipped (``authors_sim``
-    without an estimator argument: it runs the authors' observer)."""
-    base = preset_config(mode if mode in ("paper", "authors_sim") else "default")
-    if mode == "impact_unguarded":
-        base = replace(base, guard=replace(base.guard, enabled=False))
-    return ("impedance" if mode == "impedance" else "impact"), base
 
 
 def place_plate(model: mujoco.MjModel, data: mujoco.MjData, tcp: np.ndarray,
@@ -102,18 +89,6 @@ def press(mode: str, angle_deg: float, depth_m: float, hold_s: float, seed: int,
             "peak_force_n": float(force.max()), "max_pred_n": float(pred.max()),
             "final_pred_n": float(pred[-1]),
             "holds": rig.controller.guard.holds_started}
-
-
-def check_robot_record(out: Path, robot_set: Sequence[str]) -> None:
-    """Keep ``robot_set`` in ``out/robot.json``; InvalidArgumentError (one line) when ``out``
-    holds results of another robot (no file: the ideal robot, ``[]``)."""
-    path = out / "robot.json"
-    had = json.loads(path.read_text())["robot_set"] if path.exists() else []
-    if list(had) != list(robot_set) and (out / "setdown.csv").exists():
-        raise InvalidArgumentError(
-            f"{out} holds set-downs with --robot-set {had or 'none (ideal)'}, not "
-            f"{list(robot_set) or 'none (ideal)'}; valid: the same --robot-set, or another --out")
-    path.write_text(json.dumps({"robot_set": list(robot_set)}) + "\n")
 
 
 def _floats(text: str, flag: str, lo: float, hi: float, unit: str) -> list[float]:
@@ -214,8 +189,6 @@ def main(argv: list[str] | None = None) -> int:
     if args.scenario != "setdown":
         run_plate(args, 8.0 if args.hold_s is None else args.hold_s)
     if args.scenario != "plate":
-        from impact_eval.experiments.press_setdown import run_setdown  # imports this module
-
         try:
             df = run_setdown(args.out, args.modes, args.loads_kg, args.setdown_depths,
                              6.0 if args.hold_s is None else args.hold_s, args.seed, args.traces,

@@ -43,15 +43,15 @@ import mujoco
 import numpy as np
 import pandas as pd
 
-from impact_envs.control.controller import ImpactController
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError, check_choice
+from impact_control.ik import HOME_Q
 from impact_envs.envs.options import RobotOptions, apply_robot_overrides
 from impact_envs.envs.robot_parts import build_robot
-from impact_envs.errors import InvalidArgumentError, check_choice
 from impact_envs.loop import control_tick
-from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.sim import FrankaSim
 from impact_eval.experiments.physics import Rig
-from impact_eval.experiments.press import TRACES, check_robot_record, mode_controller
+from impact_eval.experiments.press_modes import TRACES, check_robot_record, mode_controller
 
 SCENE, LOAD, TABLE, WELD = "setdown_scene.xml", "setdown_load", "setdown_table", "setdown_grasp"
 LOAD_CENTRE_IN_HAND_M, LOAD_HALF_WIDTH_M, LOAD_BELOW_TCP_M = 0.1534, 0.03, 0.11

@@ -15,8 +15,8 @@ from dataclasses import replace
 
 import pandas as pd
 
-from impact_envs.control.config import ControllerConfig, LimitsConfig
-from impact_envs.control.presets import preset_config
+from impact_control.config import ControllerConfig, LimitsConfig
+from impact_control.presets import preset_config
 from impact_eval.experiments import adaptation
 
 

@@ -18,7 +18,7 @@ import gymnasium as gym
 import numpy as np
 
 import impact_envs  # noqa: F401 - registers the envs
-from impact_envs.control.lie import rot6d_from_matrix
+from impact_control.lie import rot6d_from_matrix
 from impact_envs.envs.options import REALISMS, RobotOptions
 
 POSES_M = ((0.0, 0.0, 0.0), (0.10, 0.15, 0.0), (-0.10, -0.15, 0.05), (0.12, -0.10, -0.10),

@@ -30,9 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from impact_envs.control.config import ControllerConfig
-from impact_envs.control.controller import ImpactController
-from impact_envs.robot.ik import HOME_Q
+from impact_control.config import ControllerConfig
+from impact_control.controller import ImpactController
+from impact_control.ik import HOME_Q
 from impact_eval.experiments.physics import Rig
 
 PAYLOADS_KG = (0.0, 2.5, 5.0)

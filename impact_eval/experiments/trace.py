@@ -25,9 +25,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from impact_control.errors import ImpactError
+from impact_control.policy import stack_obs
 from impact_envs.cli import add_robot_set
-from impact_envs.errors import ImpactError
-from impact_envs.policies.interface import stack_obs
 from impact_eval.envs import check_env_id, describe_env, make_env
 from impact_eval.methods import resolve_method
 

@@ -2,10 +2,11 @@
 
 The package is copied to a temporary folder, the example stage (``stage_example/
 friction_observer.py``, a joint-friction observer feeding the wrench estimator) is added as
-``control/friction_observer.py``, and ``EDITS`` (the guide's, verbatim) are applied to
-``control/kernels.py`` and ``control/controller.py``. In a fresh interpreter on that copy, with
-numba's cache starting empty, an env then runs the stage inside its compiled 1 kHz loop, and
-``get_state``/``set_state`` restore it, with nothing else of the package edited.
+``impact_control/friction_observer.py``, and ``EDITS`` (the guide's, verbatim) are applied
+to ``impact_control/kernels.py`` and ``impact_control/controller.py``. In a fresh interpreter
+on that copy, with numba's cache starting empty, an env then runs the stage inside its
+compiled 1 kHz loop, and ``get_state``/``set_state`` restore it, with nothing else of the
+package edited.
 """
 
 from __future__ import annotations
@@ -20,18 +21,20 @@ from pathlib import Path
 
 import pytest
 
+import impact_control
 import impact_envs
 
-PACKAGE = Path(impact_envs.__file__).resolve().parent
+PACKAGE = Path(impact_control.__file__).resolve().parent
+ENVS = Path(impact_envs.__file__).resolve().parent
 STAGE = Path(__file__).parent / "stage_example" / "friction_observer.py"
-STAGE_PATH = "control/friction_observer.py"
+STAGE_PATH = "friction_observer.py"
 
 EDITS: dict[str, list[tuple[str, str]]] = {
-    "control/kernels.py": [
-        ("from impact_envs.control.limits import torque_limiter, unpack_limiter\n",
-         "from impact_envs.control.friction_observer import (\n"
+    "kernels.py": [
+        ("from impact_control.limits import torque_limiter, unpack_limiter\n",
+         "from impact_control.friction_observer import (\n"
          "    friction_observer_step,\n    unpack_friction_observer,\n)\n"
-         "from impact_envs.control.limits import torque_limiter, unpack_limiter\n"),
+         "from impact_control.limits import torque_limiter, unpack_limiter\n"),
         ("    lim: Packed\n", "    lim: Packed\n    fo: Packed\n"),
         ("    lim = unpack_limiter(state.lim.buffer, state.lim.scalars)[0]\n",
          "    lim = unpack_limiter(state.lim.buffer, state.lim.scalars)[0]\n"
@@ -39,10 +42,10 @@ EDITS: dict[str, list[tuple[str, str]]] = {
         ("    if est.momentum:\n",
          "    fric = friction_observer_step(dq, fric, fo)\n    if est.momentum:\n"),
     ],
-    "control/controller.py": [
-        ("from impact_envs.control.limits import TorqueLimiter\n",
-         "from impact_envs.control.friction_observer import FrictionObserver, "
-         "FrictionObserverConfig\nfrom impact_envs.control.limits import TorqueLimiter\n"),
+    "controller.py": [
+        ("from impact_control.limits import TorqueLimiter\n",
+         "from impact_control.friction_observer import FrictionObserver, "
+         "FrictionObserverConfig\nfrom impact_control.limits import TorqueLimiter\n"),
         ("        self.limiter = TorqueLimiter(cfg.limits, cfg.dt_s)\n",
          "        self.limiter = TorqueLimiter(cfg.limits, cfg.dt_s)\n"
          "        self.friction_observer = FrictionObserver(FrictionObserverConfig(), cfg.dt_s)\n"),
@@ -57,9 +60,11 @@ EDITS: dict[str, list[tuple[str, str]]] = {
 CHECK = textwrap.dedent('''
     import gymnasium as gym
     import numpy as np
+    import impact_control
     import impact_envs
-    from impact_envs import jit_cache
+    from impact_control import jit_cache
     assert impact_envs.__file__.startswith({root!r}), impact_envs.__file__
+    assert impact_control.__file__.startswith({root!r}), impact_control.__file__
     assert any(p.name == "friction_observer.py" for p in jit_cache.kernel_sources())
     env = gym.make("IMPACT/Hammer-v0", controller="impact")
     obs, _ = env.reset(seed=3)
@@ -87,10 +92,12 @@ CHECK = textwrap.dedent('''
 
 
 def _copy_with_stage(root: Path) -> Path:
-    """The package under ``root``, with the stage module added and ``EDITS`` applied."""
-    copy = root / "impact_envs"
-    shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns(
-        "__pycache__", "checkpoints", "*.nbi", "*.nbc"))
+    """The controller package under ``root``, with the stage module added and ``EDITS``
+    applied, and the env package beside it."""
+    copy = root / "impact_control"
+    for source, target in ((PACKAGE, copy), (ENVS, root / "impact_envs")):
+        shutil.copytree(source, target, ignore=shutil.ignore_patterns(
+            "__pycache__", "checkpoints", "*.nbi", "*.nbc"))
     shutil.copy(STAGE, copy / STAGE_PATH)
     for rel, edits in EDITS.items():
         path = copy / rel
@@ -108,7 +115,8 @@ def test_the_guides_edits_apply_to_today_s_source(tmp_path):
     changed = {rel for rel in EDITS if not filecmp.cmp(PACKAGE / rel, copy / rel, shallow=False)}
     assert changed | {STAGE_PATH} == {*EDITS, STAGE_PATH}
     assert len(changed | {STAGE_PATH}) <= 3
-    assert filecmp.cmp(PACKAGE / "envs/state.py", copy / "envs/state.py", shallow=False)
+    assert filecmp.cmp(ENVS / "envs/state.py", tmp_path / "impact_envs/envs/state.py",
+                       shallow=False)
 
 
 @pytest.mark.slow

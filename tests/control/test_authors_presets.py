@@ -10,17 +10,17 @@ import numpy as np
 import pytest
 from fixtures.fake_dynamics import ConstantArmDynamics
 
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.lie import matrix_to_quat
-from impact_envs.control.overrides import apply_overrides
-from impact_envs.control.presets import (
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError
+from impact_control.lie import matrix_to_quat
+from impact_control.overrides import apply_overrides
+from impact_control.presets import (
     PRESETS,
     ROBOT_PRESETS,
     check_robot_preset,
     preset_config,
     preset_name,
 )
-from impact_envs.errors import InvalidArgumentError
 
 
 def test_both_presets_carry_the_authors_values() -> None:
@@ -157,7 +157,7 @@ def test_every_array_of_the_optional_stages_is_in_the_snapshot() -> None:
 
 
 def test_the_tick_reads_each_optional_stage_flag_from_the_header() -> None:
-    from impact_envs.control.optional_stages import (
+    from impact_control.optional_stages import (
         joint_limits_on,
         observer_on,
         target_filter_on,

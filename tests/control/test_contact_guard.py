@@ -7,12 +7,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from impact_envs.control.config import ContactGuardConfig, ControllerConfig
-from impact_envs.control.contact_guard import ContactGuard, guard_feedforward
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.presets import preset_config
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.robot.ik import HOME_Q
+from impact_control.config import ContactGuardConfig, ControllerConfig
+from impact_control.contact_guard import ContactGuard, guard_feedforward
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError
+from impact_control.ik import HOME_Q
+from impact_control.presets import preset_config
 from impact_eval.experiments.physics import Rig
 from impact_eval.experiments.press import press
 
@@ -87,7 +87,7 @@ def test_guard_config_validation(kwargs: dict) -> None:
 def _holding_guard() -> ContactGuard:
     """A guard that has just blocked a growth along -z (a press down into a table) from a
     feedforward f0 = (3, 0, -4) N."""
-    from impact_envs.control.contact_guard import contact_guard_step
+    from impact_control.contact_guard import contact_guard_step
 
     guard = ContactGuard(GUARD_ON, 0.001, 400.0)
     ones, pos = np.ones(6), np.zeros(3)
@@ -115,7 +115,7 @@ def test_a_hold_drops_the_push_into_the_contact_and_keeps_the_vertical_rise_free
 
 
 def test_a_hold_ends_when_the_tcp_moves() -> None:
-    from impact_envs.control.contact_guard import contact_guard_step
+    from impact_control.contact_guard import contact_guard_step
 
     guard = _holding_guard()
     w = np.array([3.0, 0.0, -9.0, 0.0, 0.0, 0.0])

@@ -4,22 +4,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import torch
 from fixtures.fake_dynamics import ConstantArmDynamics
 
-from impact_envs.control.config import (
+from impact_control.config import (
     ContactGuardConfig,
     ControllerConfig,
     LimitsConfig,
 )
-from impact_envs.control.controller import ImpactController
-from impact_envs.control.internal_model import OUTPUT_SCALE
-from impact_envs.control.lie import matrix_to_quat
-from impact_envs.control.limits import LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S
-from impact_envs.control.presets import preset_config
-from impact_envs.errors import InvalidArgumentError
-
-torch.set_num_threads(1)
+from impact_control.controller import ImpactController
+from impact_control.errors import InvalidArgumentError
+from impact_control.internal_model import OUTPUT_SCALE
+from impact_control.lie import matrix_to_quat
+from impact_control.limits import LIBFRANKA_MAX_TORQUE_RATE_NM_PER_S
+from impact_control.presets import preset_config
 
 W_CONST = np.array([1.0, -2.0, 24.5, 0.1, -0.2, 0.3])
 NO_LIMITS = LimitsConfig(torque_max_nm=(1e9,) * 7, torque_rate_max_nm_per_s=1e12)
@@ -27,10 +24,9 @@ NO_LIMITS = LimitsConfig(torque_max_nm=(1e9,) * 7, torque_rate_max_nm_per_s=1e12
 
 def _constant_model(ctrl: ImpactController, wrench: np.ndarray) -> None:
     """Make the internal model output ``wrench`` for any input and freeze it."""
-    last = ctrl.internal_model.net[-1]
-    with torch.no_grad():
-        last.weight.zero_()
-        last.bias.copy_(torch.as_tensor(wrench / OUTPUT_SCALE, dtype=torch.float32))
+    net = ctrl.internal_model.net
+    net.weights[-1][...] = 0.0
+    net.biases[-1][...] = wrench / OUTPUT_SCALE
     ctrl.internal_model.refresh_fast_path()
     ctrl.internal_model.learning_enabled = False
 
@@ -234,7 +230,7 @@ def test_closed_loop_payload_impact_removes_sag_impedance_does_not() -> None:
 
 
 def test_with_pinocchio_arm_runs_and_holds_still() -> None:
-    dynamics = pytest.importorskip("impact_envs.robot.dynamics")
+    dynamics = pytest.importorskip("impact_control.dynamics")
     arm = dynamics.PinocchioArm()
     q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
     dq = np.zeros(7)
@@ -259,7 +255,7 @@ def test_with_pinocchio_arm_runs_and_holds_still() -> None:
 
 
 def test_beyond_hardware_limits_names_each_setting_above_the_fr3() -> None:
-    from impact_envs.control.config import LimitsConfig, beyond_hardware_limits
+    from impact_control.config import LimitsConfig, beyond_hardware_limits
 
     assert beyond_hardware_limits(LimitsConfig()) == []
     lower = LimitsConfig(torque_max_nm=(50.0,) * 4 + (10.0,) * 3, torque_rate_max_nm_per_s=500.0)

@@ -24,15 +24,15 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from impact_envs.control import kernels
-from impact_envs.control.config import ControllerConfig
-from impact_envs.control.controller import INPUT_ABS_MAX, ImpactController
-from impact_envs.control.lie import matrix_to_quat
-from impact_envs.control.limits import unpack_limiter
-from impact_envs.errors import InvalidArgumentError
+from impact_control import kernels
+from impact_control.config import ControllerConfig
+from impact_control.controller import INPUT_ABS_MAX, ImpactController
+from impact_control.errors import InvalidArgumentError
+from impact_control.lie import matrix_to_quat
+from impact_control.limits import unpack_limiter
 from impact_franka.fci import fr3_config
 
-dynamics = pytest.importorskip("impact_envs.robot.dynamics")
+dynamics = pytest.importorskip("impact_control.dynamics")
 
 EXAMPLES = int(os.environ.get("IMPACT_PROPERTY_EXAMPLES", "100"))
 """Examples per run of the default suite (52 s for 300 in CI's two processes); the slow test

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 from fixtures.fake_dynamics import ConstantArmDynamics
 
-from impact_envs.control.config import EstimatorConfig
-from impact_envs.control.estimators import (
+from impact_control.config import EstimatorConfig
+from impact_control.estimators import (
     MomentumObserver,
     ResidualEstimator,
     make_estimator,
 )
-from impact_envs.control.jacobian import regularized_wrench_map
+from impact_control.jacobian import regularized_wrench_map
 
 DT = 0.001
 # Wrench acting ON the robot (e.g. a contact pushing back); the estimate must be its negative.

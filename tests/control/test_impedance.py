@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from fixtures.fake_dynamics import ConstantArmDynamics
 
-from impact_envs.control.config import ImpedanceConfig
-from impact_envs.control.impedance import CartesianImpedance
-from impact_envs.control.jacobian import regularized_wrench_map
-from impact_envs.control.lie import matrix_to_quat, so3_exp
-from impact_envs.errors import InvalidArgumentError
+from impact_control.config import ImpedanceConfig
+from impact_control.errors import InvalidArgumentError
+from impact_control.impedance import CartesianImpedance
+from impact_control.jacobian import regularized_wrench_map
+from impact_control.lie import matrix_to_quat, so3_exp
 
 K = np.array([400.0, 400.0, 400.0, 30.0, 30.0, 30.0])
 D = np.array([40.0, 40.0, 40.0, 10.95, 10.95, 10.95])

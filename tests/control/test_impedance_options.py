@@ -8,16 +8,16 @@ import numpy as np
 import pytest
 from fixtures.fake_dynamics import ConstantArmDynamics
 
-from impact_envs.control.impedance import CartesianImpedance, ImpedanceConfig
-from impact_envs.control.jacobian import regularized_wrench_map
-from impact_envs.control.joint_limits import (
+from impact_control.errors import InvalidArgumentError
+from impact_control.impedance import CartesianImpedance, ImpedanceConfig
+from impact_control.jacobian import regularized_wrench_map
+from impact_control.joint_limits import (
     FR3_Q_MAX_RAD,
     FR3_Q_MIN_RAD,
     JointLimitConfig,
     JointLimitRepulsion,
 )
-from impact_envs.control.lie import matrix_to_quat, so3_exp
-from impact_envs.errors import InvalidArgumentError
+from impact_control.lie import matrix_to_quat, so3_exp
 
 
 def _law(config: ImpedanceConfig, q: np.ndarray, dq: np.ndarray, e_pos: np.ndarray,
@@ -106,7 +106,7 @@ def test_joint_limit_config_is_checked_in_one_line() -> None:
 def test_option_flags_read_the_slots_their_layout_defines() -> None:
     """The tick reads the impedance options' flags without building their views (a view
     costs its reference count on every tick): the slots must be the layout's."""
-    from impact_envs.control.impedance_options import (
+    from impact_control.impedance_options import (
         extra_size,
         null_clamp_on,
         options_on,

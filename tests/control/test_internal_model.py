@@ -2,24 +2,24 @@
 
 from __future__ import annotations
 
-import copy
 from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
+from fixtures.torch_mlp import as_torch, fill_randn
 
-from impact_envs.control.config import InternalModelConfig
-from impact_envs.control.internal_model import (
+from impact_control.config import InternalModelConfig
+from impact_control.errors import CheckpointError, InvalidArgumentError
+from impact_control.internal_model import (
     FEATURE_DIM,
     FEATURE_OFFSET,
     FEATURE_SCALE,
     InternalModel,
 )
-from impact_envs.control.internal_model.gate import SurpriseGate
-from impact_envs.control.internal_model.net import sgd_step
-from impact_envs.control.presets import preset_config
-from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_control.internal_model.gate import SurpriseGate
+from impact_control.internal_model.net import OUTPUT_SCALE, build_network, sgd_step
+from impact_control.presets import preset_config
 
 torch.set_num_threads(1)
 
@@ -57,17 +57,18 @@ def test_first_push_fills_history() -> None:
     np.testing.assert_array_equal(x, np.broadcast_to(x[-1], x.shape))
 
 
-def test_numpy_fast_path_matches_torch() -> None:
+def test_numba_fast_path_matches_torch() -> None:
     model = InternalModel(InternalModelConfig(seed=3))
-    gen = torch.Generator().manual_seed(0)
-    with torch.no_grad():
-        for p in model.net.parameters():
-            p.copy_(0.1 * torch.randn(p.shape, generator=gen))
-    model.refresh_fast_path()
+    fill_randn(model.net, 0)
+    reference = as_torch(model.net)
     rng = np.random.default_rng(1)
     for _ in range(40):
         model.push(Q + rng.normal(size=7), rng.normal(size=7), 0.04, POS, rng.normal(size=6) * 10)
-        fast, ref = model.predict().copy(), model.predict_torch()
+        fast = model.predict().copy()
+        with torch.no_grad():
+            x = torch.from_numpy(model.history_input().copy())[None]
+            ref = reference(x)[0].numpy().astype(np.float64) * OUTPUT_SCALE
+        np.testing.assert_allclose(model.predict_reference(), ref, rtol=1e-5, atol=1e-5)
         assert np.abs(ref).max() > 0.1  # a non-trivial network
         np.testing.assert_allclose(fast, ref, rtol=1e-5, atol=1e-5)
 
@@ -156,6 +157,49 @@ def test_save_load_round_trip(tmp_path: Path) -> None:
             assert abs(model.predict()[2]) > 5.0  # the trained weights, not the initial zeros
 
 
+FMA_CPU = torch.backends.cpu.get_cpu_capability() in ("AVX2", "AVX512")
+
+
+@pytest.mark.skipif(not FMA_CPU, reason="torch's uniform_ fuses its multiply-add only with FMA")
+@pytest.mark.parametrize(("seed", "hidden", "history"), [(0, (64, 64), 32), (7, (32, 16), 4),
+                                                        (12345, (5,), 1)])
+def test_initial_weights_are_torch_linear_init_bit_for_bit(seed: int, hidden: tuple[int, ...],
+                                                           history: int) -> None:
+    """``build_network`` draws what ``torch.manual_seed(seed)`` + ``torch.nn.Linear`` would,
+    without torch; the last layer is zeroed after its draws."""
+    net = build_network(InternalModelConfig(seed=seed, hidden_sizes=hidden,
+                                            history_length=history))
+    state = torch.random.get_rng_state()
+    torch.manual_seed(seed)
+    sizes = (history * FEATURE_DIM, *hidden, 6)
+    linears = [torch.nn.Linear(a, b) for a, b in zip(sizes[:-1], sizes[1:], strict=True)]
+    torch.random.set_rng_state(state)
+    for k, linear in enumerate(linears):
+        w, b = linear.weight.detach().numpy(), linear.bias.detach().numpy()
+        if k == len(linears) - 1:
+            w, b = np.zeros_like(w), np.zeros_like(b)
+        assert net.weights[k].dtype == np.float32 and np.array_equal(net.weights[k], w)
+        assert np.array_equal(net.biases[k], b)
+
+
+def test_saved_weights_are_torchs_safetensors_layout(tmp_path: Path) -> None:
+    """A file saved without torch loads in torch under the Sequential's names, and one saved
+    from torch tensors loads into the model."""
+    from safetensors.torch import load_file, save_file
+
+    model = InternalModel(InternalModelConfig(hidden_sizes=(8,), history_length=2))
+    fill_randn(model.net, 3)
+    path = model.save(tmp_path / "m.safetensors")
+    reference = as_torch(model.net)
+    loaded = load_file(str(path))
+    assert set(loaded) == set(reference.state_dict())
+    for k, v in reference.state_dict().items():
+        assert torch.equal(loaded[k], v)
+    save_file({k: 2 * v for k, v in reference.state_dict().items()}, str(path))
+    model.load(path)
+    np.testing.assert_array_equal(model.net.weights[0], 2 * reference[0].weight.detach().numpy())
+
+
 def test_load_rejects_mismatched_or_missing(tmp_path: Path) -> None:
     path = InternalModel().save(tmp_path / "a.safetensors")
     with pytest.raises(CheckpointError):
@@ -182,11 +226,8 @@ def test_config_validation(kwargs: dict) -> None:
 def test_sgd_step_matches_autograd() -> None:
     """The hand-written gradients give the autograd + torch.optim.SGD update."""
     model = InternalModel(InternalModelConfig(hidden_sizes=(32, 16)))
-    gen = torch.Generator().manual_seed(4)
-    with torch.no_grad():
-        for p in model.net.parameters():
-            p.copy_(0.1 * torch.randn(p.shape, generator=gen))
-    reference = copy.deepcopy(model.net)
+    gen = fill_randn(model.net, 4)
+    reference = as_torch(model.net)
     x = torch.randn(16, model.input_dim, generator=gen)
     y = torch.randn(16, 6, generator=gen)
     mask = (torch.rand(16, 6, generator=gen) > 0.3).float()
@@ -195,11 +236,11 @@ def test_sgd_step_matches_autograd() -> None:
     optimizer.zero_grad()
     expected_loss.backward()
     optimizer.step()
-    _, weights, biases, _, _ = model.kernel_args()  # NumPy views of the torch parameters
+    _, weights, biases, _, _ = model.kernel_args()  # the network's own arrays
     loss = sgd_step(weights, biases, x.numpy(), y.numpy(), mask.numpy(), 0.01)
     assert loss == pytest.approx(float(expected_loss.detach()), rel=1e-6)
     for p, p_ref in zip(model.net.parameters(), reference.parameters(), strict=True):
-        np.testing.assert_allclose(p.detach().numpy(), p_ref.detach().numpy(), atol=1e-7)
+        np.testing.assert_allclose(p, p_ref.detach().numpy(), atol=1e-7)
 
 
 def test_wrench_feature_off_hides_the_estimated_wrench_from_the_network() -> None:

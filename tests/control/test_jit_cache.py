@@ -5,18 +5,26 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from impact_envs import jit_cache
+import impact_envs
+from impact_control import jit_cache
+
+ENVS_DIR = Path(impact_envs.__file__).resolve().parent
+SIM_FOLDERS = (ENVS_DIR / "loop", ENVS_DIR / "robot")
+
+
+def _names(paths: list[Path]) -> set[str]:
+    root = jit_cache.PACKAGE_DIR.parent
+    return {p.relative_to(root).as_posix() for p in paths}
 
 
 def test_kernel_sources_are_every_module_with_njit():
-    with_njit = {
-        p.relative_to(jit_cache.PACKAGE_DIR).as_posix()
-        for p in jit_cache.PACKAGE_DIR.rglob("*.py")
-        if re.search(r"^@njit", p.read_text(), re.MULTILINE)
-    }
-    found = {p.relative_to(jit_cache.PACKAGE_DIR).as_posix() for p in jit_cache.kernel_sources()}
-    assert found == with_njit
-    assert {"control/kernels.py", "loop/tick.py", "control/limits.py"} <= found
+    for folders in ((jit_cache.PACKAGE_DIR,), SIM_FOLDERS):
+        with_njit = [p for folder in folders for p in folder.rglob("*.py")
+                     if re.search(r"^@njit", p.read_text(), re.MULTILINE)]
+        assert _names(jit_cache.kernel_sources(folders)) == _names(with_njit)
+    assert {"impact_control/kernels.py", "impact_control/limits.py"} <= _names(
+        jit_cache.kernel_sources())
+    assert "impact_envs/loop/tick.py" in _names(jit_cache.kernel_sources(SIM_FOLDERS))
 
 
 def _fake_cache(tmp_path: Path) -> tuple[list[Path], Path]:
@@ -63,17 +71,18 @@ def test_refresh_covers_numba_cache_dir(tmp_path, monkeypatch):
 def test_digest_covers_the_modules_of_the_named_tuples_kernels_take():
     """Moving or renaming a kernel-argument named tuple made cached kernels unloadable (they
     pickle the type by module path); its module must count in the digest, @njit or not."""
-    from impact_envs.control.arm_model import DynamicsArrays
+    from impact_control.arm_model import DynamicsArrays
     from impact_envs.robot.sim import SimArrays
 
-    covered = {p.relative_to(jit_cache.PACKAGE_DIR).as_posix() for p in jit_cache.digest_sources()}
-    modules = {t.__module__.removeprefix("impact_envs.").replace(".", "/") + ".py"
-               for t in (DynamicsArrays, SimArrays)}
-    assert modules <= covered
-    assert "control/impedance_config.py" in covered  # no @njit line, types kernels read
-    presets = (jit_cache.PACKAGE_DIR / "control/presets.py").read_bytes()
+    sim_covered = _names(jit_cache.digest_sources((*SIM_FOLDERS, jit_cache.PACKAGE_DIR)))
+    modules = {t.__module__.replace(".", "/") + ".py" for t in (DynamicsArrays, SimArrays)}
+    assert modules <= sim_covered  # the loop's kernels take both
+    covered = _names(jit_cache.digest_sources())
+    assert "impact_control/arm_model.py" in covered
+    assert "impact_control/impedance_config.py" in covered  # no @njit line, types kernels read
+    presets = (jit_cache.PACKAGE_DIR / "presets.py").read_bytes()
     assert not jit_cache.NJIT_MARK.search(presets)
-    assert "control/presets.py" in covered
+    assert "impact_control/presets.py" in covered
 
 
 def test_editing_a_module_without_njit_changes_the_digest(tmp_path):

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from impact_envs.control.lie import (
+from impact_control.errors import InvalidArgumentError
+from impact_control.lie import (
     matrix_from_rot6d,
     matrix_to_quat,
     orientation_error,
@@ -21,7 +22,6 @@ from impact_envs.control.lie import (
     so3_exp,
     so3_log,
 )
-from impact_envs.errors import InvalidArgumentError
 
 RNG = np.random.default_rng(0)
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from impact_envs.control.config import LimitsConfig
-from impact_envs.control.limits import (
+from impact_control.config import LimitsConfig
+from impact_control.errors import InvalidArgumentError
+from impact_control.limits import (
     TorqueLimiter,
     libfranka_limits,
     limit_rate_kernel,
     saturate_kernel,
 )
-from impact_envs.errors import InvalidArgumentError
 
 TAU_MAX = np.array([87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0])
 
@@ -102,7 +102,7 @@ def _libfranka_limit_rate(max_rate: float, cmd: list[float], last: list[float]) 
 
 
 def test_libfranka_limits_are_libfranka_constants() -> None:
-    from impact_envs.control.limits import libfranka_limits
+    from impact_control.limits import libfranka_limits
 
     cfg = libfranka_limits()
     assert cfg.torque_rate_max_nm_per_s == 1000.0 - 1e-3  # kMaxTorqueRate = 1000 - kLimitEps
@@ -111,7 +111,7 @@ def test_libfranka_limits_are_libfranka_constants() -> None:
 
 
 def test_libfranka_rate_limiter_is_bit_identical_to_limit_rate() -> None:
-    from impact_envs.control.limits import libfranka_limits
+    from impact_control.limits import libfranka_limits
 
     rng = np.random.default_rng(3)
     limiter = TorqueLimiter(libfranka_limits(), dt_s=0.001)
@@ -125,7 +125,7 @@ def test_libfranka_rate_limiter_is_bit_identical_to_limit_rate() -> None:
 
 
 def test_libfranka_rate_limiter_never_exceeds_the_robots_rate() -> None:
-    from impact_envs.control.limits import libfranka_limits
+    from impact_control.limits import libfranka_limits
 
     limiter = TorqueLimiter(libfranka_limits(), dt_s=0.001)
     gravity = np.zeros(7)
@@ -137,8 +137,8 @@ def test_libfranka_rate_limiter_never_exceeds_the_robots_rate() -> None:
 
 
 def test_libfranka_rate_limiter_needs_a_1khz_controller() -> None:
-    from impact_envs.control.config import ControllerConfig
-    from impact_envs.control.limits import libfranka_limits
+    from impact_control.config import ControllerConfig
+    from impact_control.limits import libfranka_limits
 
     with pytest.raises(InvalidArgumentError, match="kDeltaT"):
         ControllerConfig(dt_s=0.002, limits=libfranka_limits())

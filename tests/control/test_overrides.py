@@ -6,9 +6,9 @@ from dataclasses import replace
 
 import pytest
 
-from impact_envs.control.config import ControllerConfig
-from impact_envs.control.overrides import apply_overrides
-from impact_envs.errors import InvalidArgumentError
+from impact_control.config import ControllerConfig
+from impact_control.errors import InvalidArgumentError
+from impact_control.overrides import apply_overrides
 
 
 def test_overrides_parse_by_field_type_and_leave_the_rest() -> None:

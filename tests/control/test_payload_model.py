@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from impact_envs.control.payload_model import PayloadModel, PayloadModelConfig
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.payload_model import PayloadModel, PayloadModelConfig
 
 DT = 0.001
 DOWN = np.diag([1.0, -1.0, -1.0])

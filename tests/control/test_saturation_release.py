@@ -9,14 +9,14 @@ import math
 import numpy as np
 import pytest
 
-from impact_envs.control.config import ControllerConfig
-from impact_envs.control.overrides import apply_overrides
-from impact_envs.control.saturation_release import (
+from impact_control.config import ControllerConfig
+from impact_control.errors import InvalidArgumentError
+from impact_control.overrides import apply_overrides
+from impact_control.saturation_release import (
     SaturationRelease,
     SaturationReleaseConfig,
     saturation_release_restore,
 )
-from impact_envs.errors import InvalidArgumentError
 
 TAU_MAX = np.array([87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0])
 FREE = np.zeros(7)
@@ -95,7 +95,7 @@ def test_the_command_is_not_scaled_and_restore_gives_the_unscaled_feedforward() 
     sr = _release(margin_nm=0.0, )
     for _ in range(3):
         sr.step(WRIST_AT_BOUND, TAU_MAX, W_FF)
-    from impact_envs.control.saturation_release import saturation_release_step
+    from impact_control.saturation_release import saturation_release_step
 
     w, cmd, extra = W_FF.copy(), np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0]), np.zeros(6)
     saturation_release_step(WRIST_AT_BOUND, TAU_MAX, 0.0, w, cmd, extra, sr.state)
@@ -110,8 +110,8 @@ def test_the_command_is_not_scaled_and_restore_gives_the_unscaled_feedforward() 
 
 
 def test_on_in_default_only_and_off_through_an_override() -> None:
-    from impact_envs.control.optional_stages import OptionalStages, saturation_release_on
-    from impact_envs.control.presets import PRESETS, preset_config
+    from impact_control.optional_stages import OptionalStages, saturation_release_on
+    from impact_control.presets import PRESETS, preset_config
 
     for name in PRESETS:
         assert preset_config(name).saturation_release.enabled == (name == "default"), name

@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from impact_envs.control.config import ControllerConfig, SlowWrenchConfig
-from impact_envs.control.presets import preset_config
-from impact_envs.control.slow_filter import SlowWrenchFilter, step_response_time_s
-from impact_envs.errors import InvalidArgumentError
+from impact_control.config import ControllerConfig, SlowWrenchConfig
+from impact_control.errors import InvalidArgumentError
+from impact_control.presets import preset_config
+from impact_control.slow_filter import SlowWrenchFilter, step_response_time_s
 
 DT = 0.001
 PAPER = preset_config("paper").slow_wrench
@@ -126,7 +126,7 @@ def test_tcp_frame_clips_on_tcp_axes_and_reports_the_world_wrench() -> None:
 
 
 def test_the_options_layout_and_flag_slot_agree() -> None:
-    from impact_envs.control.slow_filter_options import (
+    from impact_control.slow_filter_options import (
         EXTRA_SIZE,
         options_on,
         unpack_slow_filter_extra,

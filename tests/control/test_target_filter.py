@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from impact_envs.control.lie import matrix_to_quat, quat_to_matrix, so3_exp, so3_log
-from impact_envs.control.se3 import se3_exp, se3_log
-from impact_envs.control.target_filter import TargetFilter, TargetFilterConfig
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.lie import matrix_to_quat, quat_to_matrix, so3_exp, so3_log
+from impact_control.se3 import se3_exp, se3_log
+from impact_control.target_filter import TargetFilter, TargetFilterConfig
 
 
 def _rot_x(angle: float) -> np.ndarray:

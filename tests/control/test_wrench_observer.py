@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from fixtures.fake_dynamics import ConstantArmDynamics
 
-from impact_envs.control.arm_model import dynamics_arrays
-from impact_envs.control.jacobian import regularized_wrench_map
-from impact_envs.control.wrench_observer import WrenchObserver, WrenchObserverConfig
-from impact_envs.errors import InvalidArgumentError
+from impact_control.arm_model import dynamics_arrays
+from impact_control.errors import InvalidArgumentError
+from impact_control.jacobian import regularized_wrench_map
+from impact_control.wrench_observer import WrenchObserver, WrenchObserverConfig
 
 LAMBDA = 0.02
 

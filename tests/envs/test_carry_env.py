@@ -10,11 +10,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from impact_control.errors import InvalidArgumentError
+from impact_control.policy import stack_obs
 from impact_envs.envs.carry import ControllerCarry, episode_views
 from impact_envs.envs.options import RobotOptions
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 
 ENV_ID = "IMPACT/Hammer-v0"
 MASS = {"object_mass": 2.5}

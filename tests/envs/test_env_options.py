@@ -8,9 +8,9 @@ import gymnasium as gym
 import pytest
 
 import impact_envs
+from impact_control.errors import InvalidArgumentError
 from impact_envs import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.envs.arguments import coerce_options
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.robot.hand import MAX_GRASP_FORCE_N
 from impact_envs.robot.sim import FrankaSim
 

@@ -9,11 +9,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from impact_control.errors import InvalidArgumentError
+from impact_control.policy import stack_obs
+from impact_control.presets import preset_config
 from impact_envs import ENV_IDS
-from impact_envs.control.presets import preset_config
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 
 
 def _flat(obs: dict, reward: float, info: dict) -> np.ndarray:
@@ -71,7 +71,7 @@ def test_deepcopy_and_pickle_step_identically(env_id):
 
 def _cut_weight(state):
     name = next(iter(state.weights))
-    state.weights[name] = state.weights[name][:1].clone()
+    state.weights[name] = state.weights[name][:1].copy()
 
 
 def _cut_array(state):
@@ -141,12 +141,12 @@ def test_a_foreign_or_damaged_state_is_refused_and_changes_nothing(case):
 
 
 def _stage_objects(ctrl: object) -> list[tuple[str, object]]:
-    """The controller and every object of impact_envs.control it holds, two levels deep."""
+    """The controller and every object of impact_control it holds, two levels deep."""
     found, todo = [("controller", ctrl)], [("controller", ctrl)]
     while todo:
         path, obj = todo.pop()
         for name, value in vars(obj).items():
-            if type(value).__module__.startswith("impact_envs.control") and hasattr(
+            if type(value).__module__.startswith("impact_control") and hasattr(
                     value, "__dict__") and path.count(".") < 2:
                 found.append((f"{path}.{name}", value))
                 todo.append((f"{path}.{name}", value))
@@ -178,7 +178,7 @@ def test_every_array_a_stage_keeps_is_in_the_snapshot_or_declared_stateless(pres
 def test_a_stage_added_without_its_state_is_caught():
     """Negative control: a second slow filter hung on the controller but not wired into
     ``kernel_state()`` is reported by the check above."""
-    from impact_envs.control.slow_filter import SlowWrenchFilter
+    from impact_control.slow_filter import SlowWrenchFilter
 
     env = gym.make("IMPACT/Hammer-v0", controller="impact")
     ctrl = env.unwrapped.controller

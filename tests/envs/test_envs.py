@@ -9,10 +9,10 @@ from fixtures.rollouts import expert_rollout
 from gymnasium.utils.env_checker import check_env
 
 import impact_envs
+from impact_control.errors import InvalidArgumentError
+from impact_control.policy import stack_obs
 from impact_envs.envs.options import RenderOptions, RobotOptions
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 
 ENV_IDS = impact_envs.ENV_IDS
 

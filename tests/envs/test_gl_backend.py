@@ -141,8 +141,8 @@ def test_a_failing_renderer_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None
     ``make_renderer`` turns it into one RenderingError line naming what to set."""
     import mujoco
 
+    from impact_control.errors import ImpactError, RenderingError
     from impact_envs import _gl
-    from impact_envs.errors import ImpactError, RenderingError
 
     for exc in (mujoco.FatalError("an OpenGL platform library has not been loaded\ninto "
                                   "this process"),
@@ -163,7 +163,7 @@ def test_no_gl_context_is_one_line_at_construction() -> None:
     """glfw without a display cannot make a context: RenderingError names MUJOCO_GL=egl."""
     done = _python(
         "import gymnasium as gym, impact_envs\n"
-        "from impact_envs.errors import RenderingError\n"
+        "from impact_control.errors import RenderingError\n"
         "try:\n"
         "    gym.make('IMPACT/Dumbbell-v0', observation='rgbd')\n"
         "except RenderingError as exc:\n"
@@ -179,8 +179,8 @@ def test_mujoco_imported_first_is_named_in_the_error(monkeypatch: pytest.MonkeyP
     set) is told why, and what to set."""
     import mujoco
 
+    from impact_control.errors import RenderingError
     from impact_envs import _gl
-    from impact_envs.errors import RenderingError
 
     monkeypatch.setattr(_gl, "chosen", None)
     for name in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY"):

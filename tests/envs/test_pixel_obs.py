@@ -16,9 +16,9 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import impact_envs
+from impact_control.errors import InvalidArgumentError
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.envs.pixels import privileged_keys
-from impact_envs.errors import InvalidArgumentError
 
 ENV_IDS = impact_envs.ENV_IDS
 ROBOT_KEYS = ("ee_pos", "ee_rot6d", "gripper_width", "joint_pos", "joint_vel")

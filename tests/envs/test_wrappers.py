@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+from impact_control.errors import InvalidArgumentError
+from impact_control.lie import quat_to_matrix
 from impact_envs import ENV_IDS
-from impact_envs.control.lie import quat_to_matrix
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.wrappers import RLActions
 
 
@@ -70,7 +70,7 @@ def test_sb3_trains_a_few_hundred_steps(algo):
 def test_a_physics_blow_up_ends_the_episode_instead_of_raising(monkeypatch):
     """A PPO run on Disturbance (IMPACT, delta) hit "velocity blow-up" and the raise killed
     training; the wrapper turns it into a terminated episode with the reason in info."""
-    from impact_envs.errors import SimulationError
+    from impact_control.errors import SimulationError
 
     env = RLActions(gym.make("IMPACT/Disturbance-v0"), mode="delta")
     first, _ = env.reset(seed=0)

@@ -9,7 +9,7 @@ import pytest
 from fixtures.eval_fake import ENV_ID
 
 import impact_eval
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 
 
 class _Constant:

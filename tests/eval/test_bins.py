@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from fixtures.eval_fake import ENV_ID, FakePolicy
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.api import evaluate
 from impact_eval.bins import MassBin, draw_in_bin, format_bins, parse_bins
 from impact_eval.cli import main
@@ -145,10 +145,12 @@ def test_reproduce_reruns_a_bin_table_from_its_recorded_bins(tmp_path: Path) -> 
     from impact_eval.reproduce_manifest import sweep_argv
 
     assert main(_args(tmp_path / "run", "0.5-1.5,1.5-4")) == 0
-    args = json.loads((tmp_path / "run" / "run.json").read_text())["args"]
-    argv = sweep_argv(args)
-    assert argv[argv.index("--mass-bins") + 1] == "0.5-1.5,1.5-4"
-    assert "--param-values" not in argv and args["bin_highs"] == [1.5, 4.0]
+    run = json.loads((tmp_path / "run" / "run.json").read_text())
+    argv = sweep_argv(run)
+    assert argv[argv.index("--mass-bins") + 1] == "0.5-1.5,1.5-4.0"  # the spec's own text
+    assert "--param-values" not in argv and run["spec"]["bin_highs"] == [1.5, 4.0]
+    legacy = sweep_argv({"args": run["args"]})  # a run.json from before the spec
+    assert legacy[legacy.index("--mass-bins") + 1] == "0.5-1.5,1.5-4"
     assert main([*argv, "--workers", "1", "--envs-per-worker", "2",
                  "--out", str(tmp_path / "again")]) == 0
     assert ((tmp_path / "again" / "episodes.csv").read_bytes()

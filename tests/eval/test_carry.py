@@ -17,17 +17,12 @@ import gymnasium as gym
 import pytest
 from fixtures.eval_fake import ENV_ID as FAKE_ENV_ID
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.cli import main
 from impact_eval.csvio import read_rows
-from impact_eval.methods import (
-    AUTHORS_ROBOT,
-    MethodSpec,
-    _build_scripted,
-    _dp_factory,
-    register_method,
-    resolve_method,
-)
+from impact_eval.method_parts import AUTHORS_ROBOT, policy_part
+from impact_eval.methods import MethodSpec, register_method, resolve_method
+from impact_eval.spec import RunOptions, SweepSpec
 from impact_eval.sweep import SweepConfig, plan_tasks
 
 BARE_ID = "ImpactCarryTest/Hammer-v0"
@@ -177,9 +172,10 @@ def test_a_resume_under_another_realism_is_refused(reference: Path, tmp_path: Pa
 
 
 def _config(methods: tuple[str, ...], episodes: int = 4) -> SweepConfig:
-    return SweepConfig(env_id=ENV_ID, canonical_env_id=BARE_ID, param_name="object_mass",
-                       policy_dt=1 / 30, methods=methods, values=(0.5, 2.5), episodes=episodes,
-                       seed=4, workers=1, envs_per_worker=2)
+    spec = SweepSpec(env_id=ENV_ID, methods=methods, values=(0.5, 2.5), episodes=episodes,
+                     seed=4)
+    return SweepConfig(spec, RunOptions(out=Path("unused"), envs_per_worker=2),
+                       canonical_env_id=BARE_ID, param_name="object_mass", policy_dt=1 / 30)
 
 
 def test_a_carried_cell_is_one_task_rerun_from_its_start() -> None:
@@ -200,15 +196,12 @@ def test_a_carried_cell_is_one_task_rerun_from_its_start() -> None:
 
 
 def test_the_authors_methods() -> None:
-    for name, policy in (("impact_authors", "vanilla"), ("scripted_impact_authors", None)):
+    for name, policy in (("impact_authors", "dp.vanilla"), ("scripted_impact_authors", "scripted")):
         spec = resolve_method(name)
         assert (spec.controller, spec.preset, spec.carry, spec.warm) == \
             ("impact", "authors_sim", True, False)
         assert spec.robot is not None and spec.robot.torque_reading == "commanded"
-        if policy is None:
-            assert spec.build is _build_scripted
-        else:
-            assert spec.build.__qualname__ == _dp_factory(policy).__qualname__
+        assert spec.policy == policy
     assert resolve_method("impact_authors").env_key != resolve_method("impact_paper").env_key
 
 
@@ -226,7 +219,8 @@ def test_a_method_env_gets_the_robot_options() -> None:
 
 def test_carry_with_warm_is_refused_in_one_line() -> None:
     with pytest.raises(InvalidArgumentError, match="carry and warm exclude each other") as err:
-        MethodSpec("both", "impact", _build_scripted, "both", carry=True, warm=True)
+        MethodSpec("both", "impact", policy_part("scripted").build, "both", carry=True,
+                   warm=True)
     assert "\n" not in str(err.value)
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import gymnasium as gym
 import pytest
 
-from impact_envs.control.kernels import ControllerState
+from impact_control.kernels import ControllerState
 from impact_eval.experiments.crossing_cost import loop_arguments, main
 
 

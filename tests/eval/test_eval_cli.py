@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from fixtures.eval_fake import run_cli, sweep_args
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.cli import main
 
 PLOTS = [
@@ -112,7 +112,7 @@ def test_missing_sweep_options_name_quick(capsys):
 
 
 def test_quick_fills_defaults_and_explicit_options_win():
-    from impact_eval.cli import _with_defaults, sweep_parser
+    from impact_eval.sweep_command import _with_defaults, sweep_parser
 
     args = _with_defaults(sweep_parser().parse_args(["--quick", "--episodes", "2"]))
     assert args.env == "IMPACT/Hammer-v0" and args.grid == "0.2,2.5,5,7.5,10"

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.csvio import EpisodeLog, format_cell, read_rows, row_key
 from impact_eval.metrics import EPISODE_COLUMNS
 

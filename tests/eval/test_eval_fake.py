@@ -27,7 +27,7 @@ def test_fake_env_success_depends_on_mass_and_controller() -> None:
 
 
 def test_a_preset_a_plugin_env_cannot_take_is_a_one_line_error() -> None:
-    from impact_envs.errors import InvalidArgumentError
+    from impact_control.errors import InvalidArgumentError
     from impact_eval.envs import make_env
 
     make_env(ENV_ID, "impact").close()  # the default preset needs no argument

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.grid import episode_seed, format_value, parse_grid
+from impact_eval.spec import RunOptions, SweepSpec
 from impact_eval.sweep import SweepConfig, plan_tasks
 
 
@@ -71,20 +74,11 @@ def test_episode_seed_is_deterministic_and_distinct() -> None:
         episode_seed(-1, 0, 0)
 
 
-def _config(**overrides: object) -> SweepConfig:
-    base = dict(
-        env_id="x:Ns/E-v0",
-        canonical_env_id="Ns/E-v0",
-        param_name="object_mass",
-        policy_dt=1 / 30,
-        methods=("a", "b", "c"),
-        values=(0.5, 1.0, 2.0),
-        episodes=5,
-        seed=3,
-        workers=1,
-        envs_per_worker=2,
-    )
-    return SweepConfig(**{**base, **overrides})
+def _config() -> SweepConfig:
+    spec = SweepSpec(env_id="x:Ns/E-v0", methods=("a", "b", "c"), values=(0.5, 1.0, 2.0),
+                     episodes=5, seed=3)
+    return SweepConfig(spec, RunOptions(out=Path("unused"), envs_per_worker=2),
+                       canonical_env_id="Ns/E-v0", param_name="object_mass", policy_dt=1 / 30)
 
 
 def test_seeds_are_paired_across_methods() -> None:
@@ -92,7 +86,7 @@ def test_seeds_are_paired_across_methods() -> None:
     seeds: dict[tuple[float, int], set[int]] = {}
     methods: dict[tuple[float, int], set[str]] = {}
     for task in plan_tasks(cfg, set()):
-        assert 1 <= len(task.jobs) <= cfg.envs_per_worker
+        assert 1 <= len(task.jobs) <= cfg.options.envs_per_worker
         for job in task.jobs:
             seeds.setdefault((job.value, job.episode), set()).add(job.seed)
             methods.setdefault((job.value, job.episode), set()).add(task.method)

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from fixtures.eval_fake import BARE_ID, ENV_ID
 
-from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_control.errors import CheckpointError, InvalidArgumentError
 from impact_eval.cli import main
 from impact_eval.methods import (
     CHECKPOINTS_ENV_VAR,
@@ -163,7 +163,7 @@ def test_shipped_checkpoint_loads_and_acts_in_its_env(env_name: str, variant: st
     if variant == "lerobot_dp":
         pytest.importorskip("lerobot", reason="LeRobot's checkpoint needs lerobot")
     import impact_envs
-    from impact_envs.policies.interface import stack_obs
+    from impact_control.policy import stack_obs
     from impact_eval.envs import method_env
 
     monkeypatch.delenv(CHECKPOINTS_ENV_VAR, raising=False)
@@ -221,7 +221,7 @@ def test_camera_methods_make_their_envs_with_the_checkpoint_cameras():
     cameras (no object pose), and these methods share envs only with methods of the same
     observation."""
     from impact_eval.envs import method_env
-    from impact_eval.methods import RGB_OBSERVATION
+    from impact_eval.method_parts import RGB_OBSERVATION
 
     rgb, impact_rgb = resolve_method("vanilla_dp_rgb"), resolve_method("impact_rgb")
     paper = resolve_method("impact_rgb_paper")

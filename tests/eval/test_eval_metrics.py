@@ -95,8 +95,8 @@ def test_each_task_declares_its_supported_weight(env_id) -> None:
 
 
 def test_env_contact_trace_is_per_tick_and_peaks_at_the_peak() -> None:
+    from impact_control.policy import stack_obs
     from impact_envs.policies.experts import make_expert
-    from impact_envs.policies.interface import stack_obs
 
     env, expert = gym.make("IMPACT/Hammer-v0"), make_expert("IMPACT/Hammer-v0")
     obs, _ = env.reset(seed=3)

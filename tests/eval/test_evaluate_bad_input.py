@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from fixtures.eval_fake import ENV_ID, FakePolicy
 
+from impact_control.errors import InvalidArgumentError
 from impact_envs import ObservationOptions
-from impact_envs.errors import InvalidArgumentError
 from impact_eval import evaluate
 from impact_eval.api import EvaluationError
 from impact_eval.methods import method_choices
@@ -171,7 +171,7 @@ def _refused_before_writing(tmp_path: Path, error: type, match: str, **kwargs) -
 
 def test_camera_checkpoint_on_a_state_env_says_it_needs_images(tmp_path: Path) -> None:
     """It used to write a full results folder and raise "every episode raised"."""
-    from impact_envs.errors import CheckpointError
+    from impact_control.errors import CheckpointError
 
     policy = _checkpoint("vanilla_rgb")
     message = _refused_before_writing(tmp_path, CheckpointError, "needs camera images",
@@ -182,7 +182,7 @@ def test_camera_checkpoint_on_a_state_env_says_it_needs_images(tmp_path: Path) -
 
 
 def test_state_checkpoint_on_an_image_env_names_the_hidden_entry(tmp_path: Path) -> None:
-    from impact_envs.errors import CheckpointError
+    from impact_control.errors import CheckpointError
 
     _refused_before_writing(tmp_path, CheckpointError, "needs observation 'object_pos'",
                             policy=_checkpoint("vanilla"),
@@ -205,7 +205,7 @@ def test_camera_checkpoint_fits_the_env_it_was_trained_for() -> None:
     import gymnasium as gym
 
     from impact_eval.api import check_fits_env
-    from impact_eval.methods import RGB_OBSERVATION
+    from impact_eval.method_parts import RGB_OBSERVATION
 
     env = gym.make(HAMMER, observation=RGB_OBSERVATION)
     try:

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.experiments import press, press_setdown
 from impact_eval.experiments.press_setdown import moving_mean, press_measure, setdown
 
@@ -124,7 +124,7 @@ def test_bad_flags_are_one_line(flags: list[str], message: str,
 
 def test_authors_sim_mode_runs_the_shipped_preset() -> None:
     """``authors_sim`` is the preset as shipped, in the controller's "impact" mode."""
-    from impact_envs.control.presets import preset_config
+    from impact_control.presets import preset_config
 
     assert press.mode_controller("authors_sim") == ("impact", preset_config("authors_sim"))
 

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from fixtures.eval_fake import ENV_ID, FakePolicy
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.api import evaluate
 from impact_eval.cli import main
 from impact_eval.reproduce_manifest import sweep_argv
@@ -33,9 +33,10 @@ def test_the_robot_reaches_every_row_and_run_json(tmp_path: Path, capsys) -> Non
     assert main(_args(out, "--robot-set", "realism=fr3", "--robot-set", "delay_ticks=0")) == 0
     rows = pd.read_csv(out / "episodes.csv")
     assert set(rows["robot_profile"]) == {"fr3"} and len(rows) == 4
-    args = json.loads((out / "run.json").read_text())["args"]
-    assert args["robot_overrides"] == ["realism=fr3", "delay_ticks=0"]
-    assert sweep_argv(args)[-4:] == ["--robot-set", "realism=fr3", "--robot-set",
+    run = json.loads((out / "run.json").read_text())
+    assert run["args"]["robot_overrides"] == ["realism=fr3", "delay_ticks=0"]
+    assert run["spec"]["robot_overrides"] == ["realism=fr3", "delay_ticks=0"]
+    assert sweep_argv(run)[-4:] == ["--robot-set", "realism=fr3", "--robot-set",
                                      "delay_ticks=0"]  # what reproduce reruns
     assert main(_args(out, "--robot-set", "realism=fr3", "--robot-set", "delay_ticks=0",
                       "--resume")) == 0

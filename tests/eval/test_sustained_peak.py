@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.csvio import EpisodeLog, encode_rows, older_columns_missing, read_rows
 from impact_eval.metrics import ADDED_COLUMNS, EPISODE_COLUMNS, EpisodeTracker
 from impact_eval.safety import SUSTAINED_PEAK_WINDOW_S, sustained_peak, window_samples

@@ -16,7 +16,8 @@ import pytest
 from fixtures.eval_fake import REPO, cli_env, run_cli, sweep_args
 
 from impact_eval.cli import main
-from impact_eval.prepare import SweepRequest, prepare
+from impact_eval.prepare import prepare
+from impact_eval.spec import RunOptions, SweepSpec
 from impact_eval.sweep import plan_tasks
 
 pytest.importorskip("ray")
@@ -40,11 +41,10 @@ def test_ray_executor_writes_the_local_executors_bytes(ray_local, reference, tmp
 def test_a_worker_killed_mid_task_is_retried_and_each_episode_arrives_once(ray_local, tmp_path):
     from impact_eval.sweep_ray import run_on_ray
 
-    request = SweepRequest(
-        env_id="fixtures.eval_fake:ImpactTest/Fake-v0", methods="fake_fast,fake_impact",
-        grid="0.5,3", param=None, episodes=4, out=tmp_path / "unused", workers=2,
-        envs_per_worker=2, seed=3, resume=False, executor="ray")
-    cfg = prepare(request).config
+    spec = SweepSpec(env_id="fixtures.eval_fake:ImpactTest/Fake-v0",
+                     methods=("fake_fast", "fake_impact"), values=(0.5, 3.0), episodes=4, seed=3)
+    options = RunOptions(out=tmp_path / "unused", workers=2, envs_per_worker=2, executor="ray")
+    cfg = prepare(spec, options).config
     tasks = plan_tasks(cfg, set())
     (ray_local / "fired").unlink(missing_ok=True)
     (ray_local / "arm").touch()  # the first worker to reach step 3 of an episode SIGKILLs itself

@@ -20,7 +20,7 @@ import signal
 import sys
 from pathlib import Path
 
-ASSET = Path(__file__).resolve().parents[2] / "impact_envs" / "assets" / "fr3_hand.xml"
+ASSET = Path(__file__).resolve().parents[2] / "impact_control" / "assets" / "fr3_hand.xml"
 
 
 def main() -> None:

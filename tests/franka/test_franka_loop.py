@@ -21,7 +21,7 @@ from franka_servers import (
     port_open,
 )
 
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_franka.fci import (
     FrankaError,
     fr3_config,
@@ -65,7 +65,7 @@ def test_fr3_config_is_libfranka_limits_bounded_tick_and_guard() -> None:
 def test_fr3_config_keeps_a_stricter_rate_limit(preset: str, rate: float, limiter: str) -> None:
     """On an FR3 the command without gravity is limited at least as tightly as libfranka
     (the runner applies libfranka's limitRate to every command it sends as well)."""
-    from impact_envs.control.presets import preset_config
+    from impact_control.presets import preset_config
 
     limits = fr3_config(preset_config(preset)).limits
     assert (limits.torque_rate_max_nm_per_s, limits.rate_limiter) == (rate, limiter)
@@ -163,8 +163,8 @@ def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim_no_fri
 
 
 def test_collision_thresholds_leave_room_for_the_undeclared_payload() -> None:
-    from impact_envs.robot.dynamics import PinocchioArm
-    from impact_envs.robot.ik import HOME_Q
+    from impact_control.dynamics import PinocchioArm
+    from impact_control.ik import HOME_Q
     from impact_franka.collision import EXAMPLE_FORCE, EXAMPLE_TORQUE_NM, collision_thresholds
 
     arm = PinocchioArm()
@@ -218,7 +218,7 @@ def test_our_model_agrees_with_franka_s(franky_sim) -> None:
     it then until a loaded CI machine read it later (0.109 Nm)."""
     import pylibfranka as plf
 
-    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_control.dynamics import PinocchioArm
     from impact_franka.model import compare_models
 
     robot = plf.Robot(franky_sim, plf.RealtimeConfig.kIgnore)
@@ -273,8 +273,8 @@ def test_pending_robot_errors_refuse_unless_recover(monkeypatch, capsys) -> None
 def test_hold_keeps_the_tcp_with_the_fr3_configuration(franky_sim) -> None:
     import pylibfranka as plf
 
-    from impact_envs.control.controller import ImpactController
-    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_control.controller import ImpactController
+    from impact_control.dynamics import PinocchioArm
     from impact_franka.runner import hold
 
     robot = plf.Robot(franky_sim, plf.RealtimeConfig.kIgnore)
@@ -321,8 +321,8 @@ def test_sigterm_finishes_the_motion_cleanly(franky_sim) -> None:
 
     import pylibfranka as plf
 
-    from impact_envs.control.controller import ImpactController
-    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_control.controller import ImpactController
+    from impact_control.dynamics import PinocchioArm
     from impact_franka.runner import hold
 
     robot = plf.Robot(franky_sim, plf.RealtimeConfig.kIgnore)
@@ -354,8 +354,8 @@ def test_budget_overrun_stops_with_a_ramp_out(franky_sim) -> None:
     torque out within the robot's rate limit and finishes the motion without a robot error."""
     import pylibfranka as plf
 
-    from impact_envs.control.controller import ImpactController
-    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_control.controller import ImpactController
+    from impact_control.dynamics import PinocchioArm
     from impact_franka.runner import hold
 
     robot = plf.Robot(franky_sim, plf.RealtimeConfig.kIgnore)
@@ -408,8 +408,8 @@ class _FakeActive:
 
 class _FakeRobot:
     def __init__(self, fail: int) -> None:
-        from impact_envs.robot.dynamics import PinocchioArm
-        from impact_envs.robot.ik import HOME_Q
+        from impact_control.dynamics import PinocchioArm
+        from impact_control.ik import HOME_Q
 
         arm = PinocchioArm()
         arm.update(HOME_Q, np.zeros(7))
@@ -433,8 +433,8 @@ def test_a_reflex_keeps_the_ticks_and_exits_1_naming_it(monkeypatch, tmp_path, c
     command refused) are in ticks.csv, run.json has the robot's flags, and the CLI says which
     reflex in one line."""
     pytest.importorskip("pylibfranka")
-    from impact_envs.control.controller import ImpactController
-    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_control.controller import ImpactController
+    from impact_control.dynamics import PinocchioArm
     from impact_franka import cli, session
 
     robot = _FakeRobot(fail=50)
@@ -465,8 +465,8 @@ def test_a_policy_runs_at_30_hz_on_the_robot(franky_sim) -> None:
 
     import pylibfranka as plf
 
-    from impact_envs.control.controller import ImpactController
-    from impact_envs.robot.dynamics import PinocchioArm
+    from impact_control.controller import ImpactController
+    from impact_control.dynamics import PinocchioArm
     from impact_franka.demo import CirclePolicy
     from impact_franka.policy_loop import PolicyTarget
     from impact_franka.runner import run_loop

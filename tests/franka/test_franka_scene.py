@@ -26,7 +26,7 @@ from franka_servers import (
     simulator_python,
 )
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_franka.gripper import GripperCommand, GripperReply
 from impact_franka.pick_place import PickPlacePlan, PickPlaceTarget, Pose
 
@@ -328,7 +328,7 @@ def test_taught_pose_files_are_checked_before_connecting(tmp_path, capsys) -> No
 def test_a_policy_s_gripper_value_is_the_hand_command() -> None:
     """PolicyTarget hands the last accepted action's ``action[9]`` (clipped to [-1, 1]) to the
     loop; a refused action changes nothing."""
-    from impact_envs.control.lie import rot6d_from_matrix
+    from impact_control.lie import rot6d_from_matrix
     from impact_franka.policy_loop import PolicyTarget
 
     source = PolicyTarget(lambda: None, None, (np.array([0.2, -0.4, 0.1]),

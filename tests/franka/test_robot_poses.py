@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from robot_cli import DOWN, assert_refused, no_connect, pose, run_cli, write_poses
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_franka.fci import FrankaError
 from impact_franka.pick_place import Pose
 from impact_franka.poses import check_workspace, read_poses, resolve_pose, save_pose

@@ -8,7 +8,7 @@ import pytest
 
 pytest.importorskip("robosuite", reason="the robosuite extra is not installed (docs/robosuite.md)")
 
-from impact_envs.errors import InvalidArgumentError  # noqa: E402
+from impact_control.errors import InvalidArgumentError  # noqa: E402
 from impact_robosuite import controller_config  # noqa: E402
 from impact_robosuite.experiment import TASKS, make_env, run_episode, set_mass  # noqa: E402
 from impact_robosuite.scripted import PickLift  # noqa: E402
@@ -40,7 +40,7 @@ def test_the_config_selects_the_controller(method, cls, mode):
 def test_the_preset_reaches_the_controller(method, preset):
     import dataclasses
 
-    from impact_envs.control.presets import preset_config
+    from impact_control.presets import preset_config
 
     env = make_env(TASKS["lift"], method, SEED)
     try:

@@ -25,7 +25,7 @@ python3 -m venv "$VENV"
   "imageio[ffmpeg]" pandas pyarrow
 # lerobot.policies (the round trip) also imports diffusers and pyserial; then this package
 "$VENV/bin/pip" install -q "diffusers>=0.30,<0.50" pyserial
-"$VENV/bin/pip" install -q -e "$(cd "$(dirname "$0")/../.." && pwd)"
+"$VENV/bin/pip" install -q -e "$(cd "$(dirname "$0")/../.." && pwd)[bench]"
 # LeRobot's commands (lerobot-eval with the impact_lerobot plugin) import torchvision before
 # any plugin loads: a startup hook declares the two op schemas at that import
 # (tests/learn/lerobot_torchvision_hook.py; docs/lerobot.md)

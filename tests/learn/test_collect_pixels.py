@@ -9,8 +9,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from impact_control.errors import InvalidArgumentError
 from impact_envs.envs.options import ObservationOptions
-from impact_envs.errors import InvalidArgumentError
 from impact_learn.collect import collect
 from impact_learn.collect_config import CollectConfig
 from impact_learn.collect_pixels import CameraView, stored_dims

@@ -11,7 +11,7 @@ import zarr
 from fixtures.fake_reach import FAKE_ID, FakeExpert, collect_demos
 from fixtures.tiny_store import chunk_file, snapshot
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_learn import collect as collect_module
 from impact_learn.dataset import load_replay
 from impact_learn.store_format import CHECKSUM_ATTR

@@ -8,7 +8,7 @@ import pytest
 import torch
 from fixtures.reach_demos import write_dataset
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_eval.experiments.dp_inference_cost import random_policy
 from impact_learn.dataset import EpisodeMeta, ReplayWriter, load_replay

@@ -15,10 +15,10 @@ import pytest
 import torch
 from fixtures.fake_reach import FAKE_ID, OBS_DIMS, FakeExpert, collect_demos
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.policy import stack_obs
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
-from impact_envs.policies.interface import stack_obs
 from impact_eval.experiments.dp_inference_cost import random_policy
 from impact_learn import collect as collect_module
 from impact_learn.collect import collect
@@ -142,7 +142,7 @@ def test_collect_train_rollout(tmp_path):
 
 
 def test_non_finite_loss_stops_before_the_weights_change(tmp_path, monkeypatch):
-    from impact_envs.errors import TrainingError
+    from impact_control.errors import TrainingError
     from impact_learn import train as train_module
 
     collect_demos(tmp_path / "d.zarr", param=0.2)

@@ -10,7 +10,7 @@ import torch
 from fixtures.reach_demos import write_dataset
 from safetensors.torch import load_file
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
 from impact_learn import train as train_module

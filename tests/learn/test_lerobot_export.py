@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_learn.dataset import EpisodeMeta, ImageSpec, ReplayWriter, load_replay
 from impact_learn.lerobot_export import ExportConfig, export_lerobot, main
 

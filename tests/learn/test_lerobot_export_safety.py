@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from fixtures.tiny_store import image_store, snapshot
 
-from impact_envs.errors import ImpactError, InvalidArgumentError
+from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_learn import lerobot_export, lerobot_write
 from impact_learn.lerobot_export import ExportConfig, export_lerobot
 

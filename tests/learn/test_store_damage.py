@@ -13,7 +13,7 @@ import torch
 import zarr
 from fixtures.tiny_store import ATTRS, DAMAGES, DIMS, chunk_file, image_store, snapshot
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_learn import lerobot_export
 from impact_learn import train as train_module
 from impact_learn.dataset import ReplayWriter, load_replay

@@ -9,7 +9,7 @@ import pytest
 import torch
 from safetensors.torch import load_file
 
-from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_control.errors import CheckpointError, InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig, ImageEncoderConfig
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
 from impact_envs.policies.diffusion.vision import VisuomotorNet

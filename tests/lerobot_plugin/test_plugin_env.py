@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_eval.bins import draw_in_bin
 from impact_learn.dataset import EpisodeMeta, ReplayWriter
 from impact_lerobot import TASKS, PluginSettings, make_lerobot_env, observation_plan

@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from impact_envs.errors import CheckpointError
+from impact_control.errors import CheckpointError
 from impact_eval.methods import resolve_method
 from impact_lerobot import PluginSettings, make_lerobot_env, observation_plan
 from impact_lerobot.policy import LEROBOT_MISSING, load_lerobot_policy

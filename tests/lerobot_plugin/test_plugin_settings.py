@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 from gymnasium.envs.registration import registry
 
+from impact_control.errors import InvalidArgumentError
 from impact_envs import ENV_IDS
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.tasks.registry import task_class
 from impact_learn.lerobot_export import ACTION_NAMES
 from impact_lerobot import GYM_IDS, OBS_MODES, TASKS, PluginSettings, observation_plan

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from fixtures.rollouts import expert_rollout
 
+from impact_control.errors import InvalidArgumentError
 from impact_envs import ENV_IDS
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import ClosedLoop, StepTrace, TickTargets
 from impact_envs.tasks.base import Task
 

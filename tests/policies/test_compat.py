@@ -12,8 +12,8 @@ import pytest
 from safetensors.torch import load_file, save_file
 
 import impact_envs
+from impact_control.errors import CheckpointError
 from impact_envs.envs.options import ObservationOptions
-from impact_envs.errors import CheckpointError
 from impact_envs.policies.diffusion.compat import check_policy_env
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
 from impact_eval.methods import env_short_name

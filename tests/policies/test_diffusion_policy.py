@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import torch
 
-from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_control.errors import CheckpointError, InvalidArgumentError
+from impact_control.policy import Policy
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
-from impact_envs.policies.interface import Policy
 from impact_eval.experiments.dp_inference_cost import main as bench_main
 from impact_eval.experiments.dp_inference_cost import measure_inference, random_policy
 

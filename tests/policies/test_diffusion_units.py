@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.model import make_inference_scheduler, make_network
 from impact_envs.policies.diffusion.network import ConditionalUnet1D

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import impact_envs  # noqa: F401 - registers the envs
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
+from impact_control.policy import stack_obs
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 
 ROBOT = {"ee_pos": (3,), "ee_rot6d": (6,), "gripper_width": (1,), "joint_pos": (7,),
          "joint_vel": (7,)}

@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.scripted import CARRY, LOWER
 from impact_eval.experiments.adaptation import protocol_expert

@@ -8,7 +8,7 @@ import time
 import pytest
 import torch
 
-from impact_envs.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import ImageEncoderConfig
 from impact_envs.policies.diffusion.vision import (
     ImageEncoder,

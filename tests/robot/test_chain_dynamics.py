@@ -6,9 +6,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.robot.chain_dynamics import ChainParams
-from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
+from impact_control.chain_dynamics import ChainParams
+from impact_control.dynamics import ModelPerturbation, PinocchioArm
+from impact_control.errors import InvalidArgumentError
 
 
 def _states(arm: PinocchioArm, n: int, seed: int):

@@ -6,8 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.robot.dynamics import ROBOT_XML, ModelPerturbation, PinocchioArm
+from impact_control.dynamics import ROBOT_XML, ModelPerturbation, PinocchioArm
+from impact_control.errors import InvalidArgumentError
 from impact_envs.robot.mujoco_arm import full_mass_matrix
 
 FINGER = 0.02

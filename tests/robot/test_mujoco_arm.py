@@ -6,9 +6,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from impact_envs.control.controller import ImpactController
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.robot.dynamics import ARM_JOINTS, ROBOT_XML, PinocchioArm
+from impact_control.controller import ImpactController
+from impact_control.dynamics import ARM_JOINTS, ROBOT_XML, PinocchioArm
+from impact_control.errors import InvalidArgumentError
 from impact_envs.robot.mujoco_arm import MujocoArm, full_mass_matrix
 
 FINGER = 0.02

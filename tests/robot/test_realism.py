@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import impact_envs  # noqa: F401 - registers the envs
+from impact_control.dynamics import ModelPerturbation, PinocchioArm
+from impact_control.errors import InvalidArgumentError
+from impact_control.ik import HOME_Q
 from impact_envs.envs.options import RobotOptions
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.robot.dynamics import ModelPerturbation, PinocchioArm
-from impact_envs.robot.ik import HOME_Q
 from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.realism import PROFILES, Realism
 from impact_envs.robot.sim import FrankaSim

@@ -6,9 +6,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from impact_envs.errors import InvalidArgumentError
-from impact_envs.robot.dynamics import PinocchioArm
-from impact_envs.robot.ik import HOME_Q, solve_ik
+from impact_control.dynamics import PinocchioArm
+from impact_control.errors import InvalidArgumentError
+from impact_control.ik import HOME_Q, solve_ik
 from impact_envs.robot.noise import SensorNoise
 from impact_envs.robot.sim import FrankaSim
 from impact_envs.tasks.base import BodyMass, refresh_constants

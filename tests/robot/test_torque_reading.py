@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import impact_envs  # noqa: F401 - registers the envs
+from impact_control.errors import InvalidArgumentError
 from impact_envs import RobotOptions
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.loop import closed_loop
 from impact_envs.robot.sim import FrankaSim
 

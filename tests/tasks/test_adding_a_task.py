@@ -9,8 +9,8 @@ import pytest
 from fixtures.reach_task import ReachTask
 from gymnasium.utils.env_checker import check_env
 
+from impact_control.policy import stack_obs
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 from impact_envs.tasks.registry import task_class
 
 ENV_ID = ReachTask.env_id

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import impact_envs  # noqa: F401 - registers the envs
+from impact_control.errors import InvalidArgumentError
+from impact_control.policy import stack_obs
 from impact_envs import RobotOptions
-from impact_envs.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 from impact_envs.tasks.hammer_basket import (
     GRASP_OFFSET_FROM_COM_M,
     SUCCESS_HALF_M,

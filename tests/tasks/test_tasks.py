@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import impact_envs  # noqa: F401  (registers the envs)
+from impact_control.policy import stack_obs
 from impact_envs.policies.experts import make_expert
-from impact_envs.policies.interface import stack_obs
 from impact_envs.tasks.calligraphy import (
     FORCE_DESIRED_N,
     PAPER_TOP_M,

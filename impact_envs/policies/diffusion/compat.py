@@ -13,7 +13,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 
-from impact_envs.errors import CheckpointError
+from impact_control.errors import CheckpointError
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
 
 

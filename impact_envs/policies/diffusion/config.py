@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from impact_envs.errors import InvalidArgumentError, check_choice
+from impact_control.errors import InvalidArgumentError, check_choice
 
 DEFAULT_OBS_KEYS: tuple[str, ...] = (
     "ee_pos",

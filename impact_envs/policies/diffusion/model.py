@@ -13,10 +13,10 @@ import torch
 from diffusers import DDIMScheduler, DDPMScheduler
 from torch import nn
 
+from impact_control.policy import ACTION_DIM
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.network import ConditionalUnet1D
 from impact_envs.policies.diffusion.vision import ObservationEncoder, VisuomotorNet
-from impact_envs.policies.interface import ACTION_DIM
 
 DiffusionNet = ConditionalUnet1D | VisuomotorNet
 """A state-based policy's U-Net, or a visuomotor policy's encoder + U-Net."""

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from impact_envs.errors import CheckpointError
+from impact_control.errors import CheckpointError
 
 ACTION_POS = slice(0, 3)
 ACTION_ROT6D = slice(3, 9)

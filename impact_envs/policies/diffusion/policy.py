@@ -28,7 +28,8 @@ import torch
 from safetensors.torch import load_file, save_file
 
 import impact_envs
-from impact_envs.errors import CheckpointError, InvalidArgumentError
+from impact_control.errors import CheckpointError, InvalidArgumentError
+from impact_control.policy import ACTION_DIM
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.history import ObservationHistory
 from impact_envs.policies.diffusion.inference import UNetForward, frozen_unet
@@ -41,7 +42,6 @@ from impact_envs.policies.diffusion.model import (
 )
 from impact_envs.policies.diffusion.normalizer import ACTION_POS, Normalizer
 from impact_envs.policies.diffusion.vision import VisuomotorNet
-from impact_envs.policies.interface import ACTION_DIM
 
 MODEL_FILE = "model.safetensors"
 CONFIG_FILE = "config.json"

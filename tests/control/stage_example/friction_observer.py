@@ -6,7 +6,7 @@ result to the wrench estimator, which subtracts it from the measured torque:
     tau_f[k+1] = tau_f[k] + alpha (tau_model[k] + b dq[k] - tau_f[k]),  alpha = dt / (T + dt)
 
 tests/control/test_adding_a_stage.py copies the package, adds this module as
-``impact_envs/control/friction_observer.py`` and wires it in with the edits the guide shows
+``impact_control/friction_observer.py`` and wires it in with the edits the guide shows
 (``kernels.py``: one state field and two lines in the tick; ``controller.py``: build, reset,
 hand over), then checks that snapshots and the kernel cache cover it with nothing else edited.
 """
@@ -19,8 +19,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from impact_envs.control.kernel_layout import Packed, _next, layout_size
-from impact_envs.control.validation import check_positive
+from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.validation import check_positive
 
 
 @dataclass(frozen=True)

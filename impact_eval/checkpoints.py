@@ -1,0 +1,41 @@
+"""Where a method's policy checkpoint lives: ``$IMPACT_CHECKPOINTS`` or the shipped
+``impact_envs/checkpoints``, then ``<env short name>/<variant>``."""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+from impact_control.errors import CheckpointError
+
+CHECKPOINTS_ENV_VAR = "IMPACT_CHECKPOINTS"
+"""Environment variable overriding the shipped checkpoint root ``impact_envs/checkpoints``."""
+
+
+def env_short_name(env_id: str) -> str:
+    """``"IMPACT/Hammer-v0"`` (or ``"mod:IMPACT/Hammer-v0"``) -> ``"hammer"``."""
+    name = env_id.rsplit(":", 1)[-1].rsplit("/", 1)[-1]
+    return re.sub(r"-v\d+$", "", name).lower()
+
+
+def checkpoint_dir(env_id: str, variant: str) -> Path:
+    """Directory of the ``variant`` checkpoint (``vanilla``, ``augmented``, ...) of an env.
+
+    The root is ``$IMPACT_CHECKPOINTS`` if set, else ``impact_envs/checkpoints``.
+
+    Raises:
+        CheckpointError: the directory does not exist (one-line message).
+    """
+    root = os.environ.get(CHECKPOINTS_ENV_VAR)
+    if root is None:
+        import impact_envs
+
+        root = str(Path(impact_envs.__file__).parent / "checkpoints")
+    path = Path(root) / env_short_name(env_id) / variant
+    if not path.is_dir():
+        raise CheckpointError(
+            f"no {variant} checkpoint for {env_id}: {path} does not exist "
+            f"(train one with impact-train or set ${CHECKPOINTS_ENV_VAR})"
+        )
+    return path
