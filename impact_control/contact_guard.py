@@ -46,7 +46,8 @@ import numpy as np
 from numba import njit
 
 from impact_control.errors import InvalidArgumentError
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
+from impact_control.stage_layout import Layout
 from impact_control.validation import check_positive
 
 OPEN, WINDOW, WAIT, HOLD = 0.0, 1.0, 2.0, 3.0
@@ -170,25 +171,11 @@ class GuardState(NamedTuple):
     target: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_guard(buf, params):
-    """(``GuardState`` as named views of ``buf``, the layout's length); ``params`` are all
-    scalars."""
-    phase, o = _next(buf, 0, 1)
-    ticks_waited, o = _next(buf, o, 1)
-    holds_started, o = _next(buf, o, 1)
-    f0, o = _next(buf, o, 3)
-    p0, o = _next(buf, o, 3)
-    e0, o = _next(buf, o, 3)
-    hold_force, o = _next(buf, o, 3)
-    hold_pos, o = _next(buf, o, 3)
-    blocked_dir, o = _next(buf, o, 3)
-    prev_ff, o = _next(buf, o, 6)
-    offset, o = _next(buf, o, 3)
-    window_pos, o = _next(buf, o, 3)
-    target, o = _next(buf, o, 6)
-    return GuardState(params, phase, ticks_waited, holds_started, f0, p0, e0, hold_force,
-                      hold_pos, blocked_dir, prev_ff, offset, window_pos, target), o
+GUARD_LAYOUT = Layout.of(GuardState, dict(
+    phase=1, ticks_waited=1, holds_started=1, f0=3, p0=3, e0=3, hold_force=3, hold_pos=3,
+    blocked_dir=3, prev_ff=6, offset=3, window_pos=3, target=6), args=("buf", "params"))
+"""The guard's buffer (``params`` are all scalars)."""
+unpack_guard = GUARD_LAYOUT.unpacker("unpack_guard", __name__)
 
 
 def make_guard_state(cfg: ContactGuardConfig, dt_s: float, stiffness_n_per_m: float) -> Packed:
@@ -204,7 +191,7 @@ def make_guard_state(cfg: ContactGuardConfig, dt_s: float, stiffness_n_per_m: fl
         force_step_max_n=float(cfg.force_rate_max_n_per_s * dt_s),
         torque_step_max_nm=float(cfg.torque_rate_max_nm_per_s * dt_s),
         horizontal_force_max_n=float(cfg.horizontal_force_max_n))
-    return Packed(params, np.zeros(layout_size(unpack_guard, params)))
+    return Packed(params, np.zeros(GUARD_LAYOUT.size_for(params)))
 
 
 @njit(cache=True)

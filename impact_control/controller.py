@@ -147,7 +147,7 @@ class ImpactController:
         self.tick = kernels.unpack_tick(self._tick_packed.buffer, self._tick_packed.scalars)[0]
         self.signals.wrench_cmd_world = self.tick.wrench_cmd
         self.signals.wrench_ff_world = self.tick.wrench_ff
-        self.wrench_maps = self.tick.wrench_maps  # estimator's (J J^T + l^2 I)^-1 J, projector's
+        self.estimator_map = self.tick.estimator_map  # (J J^T + lambda^2 I)^-1 J (6, n)
         self._zeros6, self._zeros7 = np.zeros(6), np.zeros(7)
         self._include_friction = cfg.estimator.include_joint_friction
         self._estimator_state = self.estimator.kernel_state()

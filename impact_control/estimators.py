@@ -19,8 +19,9 @@ from numba import njit
 from impact_control.arm_model import ArmDynamics, dynamics_arrays
 from impact_control.errors import check_choice
 from impact_control.jacobian import regularized_wrench_map
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
 from impact_control.kernel_math import mat_t_vec, mat_vec
+from impact_control.stage_layout import Dim, Layout
 from impact_control.validation import check_positive
 
 ESTIMATOR_KINDS = ("residual", "momentum")
@@ -175,29 +176,16 @@ class EstimatorScalars(NamedTuple):
     n_observer: int
 
 
-@njit(cache=True, inline="always")
-def unpack_estimator(buf, sc):
-    """(``EstimatorState`` as named views of ``buf``, the layout's length)."""
-    n = sc.n_residual
-    gain, o = _next(buf, 0, 2 * n)
-    started, o = _next(buf, o, 1)
-    lowpass, o = _next(buf, o, 2 * n)
-    raw, o = _next(buf, o, 2 * n)
-    dq_prev, o = _next(buf, o, n)
-    tau_res, o = _next(buf, o, n)
-    wrench, o = _next(buf, o, 6)
-    residual = ResidualState(sc.alpha, gain, started, lowpass, raw, dq_prev, tau_res, wrench)
-    m = sc.n_observer
-    m_started, o = _next(buf, o, 1)
-    r, o = _next(buf, o, m)
-    p0, o = _next(buf, o, m)
-    integral, o = _next(buf, o, m)
-    p, o = _next(buf, o, m)
-    m_tau_res, o = _next(buf, o, m)
-    m_wrench, o = _next(buf, o, 6)
-    observer = MomentumState(sc.gain_per_s, sc.dt_s, m_started, r, p0, integral, p, m_tau_res,
-                             m_wrench)
-    return EstimatorState(sc.momentum, residual, observer), o
+_N_RES, _N_OBS = Dim.named("n_res"), Dim.named("n_obs")
+ESTIMATOR_LAYOUT = Layout.of(EstimatorState, dict(
+    residual=Layout.of(ResidualState, dict(
+        gain=2 * _N_RES, started=1, lowpass=2 * _N_RES, raw=2 * _N_RES, dq_prev=_N_RES,
+        tau_residual=_N_RES, wrench=6)),
+    observer=Layout.of(MomentumState, dict(
+        started=1, r=_N_OBS, p0=_N_OBS, integral=_N_OBS, p=_N_OBS, tau_residual=_N_OBS,
+        wrench=6))), dims={"n_res": "sc.n_residual", "n_obs": "sc.n_observer"})
+"""Both estimators' buffer (the one not running has no joints)."""
+unpack_estimator = ESTIMATOR_LAYOUT.unpacker("unpack_estimator", __name__)
 
 
 def make_estimator_state(config: EstimatorConfig, dt_s: float, n_joints: int,
@@ -207,7 +195,7 @@ def make_estimator_state(config: EstimatorConfig, dt_s: float, n_joints: int,
     alpha = 1.0 - math.exp(-dt_s / config.lowpass_time_constant_s)
     sc = EstimatorScalars(momentum, alpha, float(config.momentum_gain_per_s), float(dt_s),
                           0 if momentum else n_joints, n_joints if momentum else 0)
-    packed = Packed(sc, np.zeros(layout_size(unpack_estimator, sc)))
+    packed = Packed(sc, np.zeros(ESTIMATOR_LAYOUT.size_for(sc)))
     gain = unpack_estimator(packed.buffer, sc)[0].residual.gain
     gain[:sc.n_residual], gain[sc.n_residual:] = alpha / dt_s, alpha
     return packed

@@ -22,18 +22,19 @@ from numba import njit
 from impact_control.arm_model import ArmDynamics, dynamics_arrays
 from impact_control.impedance_config import ImpedanceConfig
 from impact_control.impedance_options import (
+    IMPEDANCE_EXTRA_LAYOUT,
     ImpedanceExtra,
     clamped_nullspace,
-    extra_size,
     gains_wrench,
     null_clamp_on,
     options_on,
     unpack_impedance_extra,
     write_impedance_options,
 )
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
 from impact_control.kernel_math import mat_t_vec, mat_vec, orientation_error
 from impact_control.lie import invalid_quaternion
+from impact_control.stage_layout import N_JOINTS, Layout
 
 __all__ = ["CartesianImpedance", "ImpedanceConfig", "ImpedanceExtra", "ImpedanceParams",
            "ImpedanceState", "impedance_law", "make_impedance_state", "unpack_impedance"]
@@ -106,30 +107,14 @@ class ImpedanceScalars(NamedTuple):
     n_joints: int
 
 
-@njit(cache=True, inline="always")
-def unpack_impedance(buf, sc):
-    """(``ImpedanceState`` as named views of ``buf``, the layout's length): the one
-    definition of the packed layout (``make_impedance_state`` sizes the buffer with it)."""
-    n = sc.n_joints
-    stiffness, o = _next(buf, 0, 6)
-    damping, o = _next(buf, o, 6)
-    q_null, o = _next(buf, o, n)
-    k_q_null, o = _next(buf, o, n)
-    pose_error, o = _next(buf, o, 6)
-    twist, o = _next(buf, o, 6)
-    wrench_imp, o = _next(buf, o, 6)
-    tau_posture, o = _next(buf, o, n)
-    wrench_null, o = _next(buf, o, 6)
-    wrench, o = _next(buf, o, 6)
-    tau_coriolis, o = _next(buf, o, n)
-    tau_gravity, o = _next(buf, o, n)
-    tau_no_gravity, o = _next(buf, o, n)
-    extra, o = _next(buf, o, extra_size(n))
-    params = ImpedanceParams(stiffness, damping, sc.k_null, sc.d_null, sc.compensate_gravity,
-                             sc.compensate_coriolis)
-    return ImpedanceState(params, q_null, k_q_null, pose_error, twist, wrench_imp, tau_posture,
-                          wrench_null, wrench, tau_coriolis, tau_gravity, tau_no_gravity,
-                          extra), o
+IMPEDANCE_LAYOUT = Layout.of(ImpedanceState, dict(
+    params=Layout.of(ImpedanceParams, dict(stiffness=6, damping=6)),
+    q_null=N_JOINTS, k_q_null=N_JOINTS, pose_error=6, twist=6, wrench_imp=6,
+    tau_posture=N_JOINTS, wrench_null=6, wrench=6, tau_coriolis=N_JOINTS,
+    tau_gravity=N_JOINTS, tau_no_gravity=N_JOINTS, extra=IMPEDANCE_EXTRA_LAYOUT.length),
+    dims={"n": "sc.n_joints"})
+"""The law's buffer; its tail ``extra`` is the options' (``IMPEDANCE_EXTRA_LAYOUT``)."""
+unpack_impedance = IMPEDANCE_LAYOUT.unpacker("unpack_impedance", __name__)
 
 
 def make_impedance_state(config: ImpedanceConfig, n_joints: int = 7) -> Packed:
@@ -137,7 +122,7 @@ def make_impedance_state(config: ImpedanceConfig, n_joints: int = 7) -> Packed:
     sc = ImpedanceScalars(float(config.nullspace_stiffness_nm_per_rad),
                           float(config.nullspace_damping), bool(config.compensate_gravity),
                           bool(config.compensate_coriolis), int(n_joints))
-    packed = Packed(sc, np.zeros(layout_size(unpack_impedance, sc)))
+    packed = Packed(sc, np.zeros(IMPEDANCE_LAYOUT.size_for(sc)))
     st = unpack_impedance(packed.buffer, sc)[0]
     write_impedance_options(unpack_impedance_extra(st.extra, n_joints)[0],
                             config.gains_frame, config.pose_error_clip_m,

@@ -22,8 +22,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from impact_control.kernel_layout import _next
 from impact_control.kernel_math import mat_t_vec, rotate, rotate_back
+from impact_control.stage_layout import N_JOINTS, Layout
 
 
 class ImpedanceExtra(NamedTuple):
@@ -56,40 +56,14 @@ class ImpedanceExtra(NamedTuple):
     tau_null: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_impedance_extra(ext, n_joints):
-    """(``ImpedanceExtra`` as named views of ``ext``, the layout's length)."""
-    on, o = _next(ext, 0, 1)
-    tcp_frame, o = _next(ext, o, 1)
-    clip_m, o = _next(ext, o, 1)
-    clip_rad, o = _next(ext, o, 1)
-    null_clamp, o = _next(ext, o, 1)
-    null_max, o = _next(ext, o, 1)
-    error_gains, o = _next(ext, o, 6)
-    twist_gains, o = _next(ext, o, 6)
-    wrench_gains, o = _next(ext, o, 6)
-    tau_null, o = _next(ext, o, n_joints)
-    return ImpedanceExtra(on, tcp_frame, clip_m, clip_rad, null_clamp, null_max, error_gains,
-                          twist_gains, wrench_gains, tau_null), o
-
-
-@njit(cache=True, inline="always")
-def extra_size(n_joints):
-    """Length of ``unpack_impedance_extra``'s layout (tests/control/test_impedance_options.py
-    checks the two agree)."""
-    return 6 + 3 * 6 + n_joints
-
-
-@njit(cache=True, inline="always")
-def options_on(ext) -> bool:
-    """``ImpedanceExtra.on`` (slot 0), read without building the views."""
-    return ext[0] != 0.0
-
-
-@njit(cache=True, inline="always")
-def null_clamp_on(ext) -> bool:
-    """``ImpedanceExtra.null_clamp`` (slot 4), read without building the views."""
-    return ext[4] != 0.0
+IMPEDANCE_EXTRA_LAYOUT = Layout.of(ImpedanceExtra, dict(
+    on=1, tcp_frame=1, clip_m=1, clip_rad=1, null_clamp=1, null_max_nm=1, error_gains=6,
+    twist_gains=6, wrench_gains=6, tau_null=N_JOINTS),
+    dims={"n": "n_joints"}, args=("ext", "n_joints"))
+"""The options' tail of the law's buffer."""
+unpack_impedance_extra = IMPEDANCE_EXTRA_LAYOUT.unpacker("unpack_impedance_extra", __name__)
+options_on = IMPEDANCE_EXTRA_LAYOUT.flag_reader("on", "options_on", __name__)
+null_clamp_on = IMPEDANCE_EXTRA_LAYOUT.flag_reader("null_clamp", "null_clamp_on", __name__)
 
 
 def write_impedance_options(x: ImpedanceExtra, gains_frame: str, clip_m: float | None,

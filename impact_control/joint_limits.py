@@ -20,7 +20,8 @@ import numpy as np
 from numba import njit
 
 from impact_control.errors import InvalidArgumentError
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
+from impact_control.stage_layout import N_JOINTS, Layout, slots
 from impact_control.validation import check_len, check_positive
 
 FR3_Q_MIN_RAD = (-2.7437, -1.7837, -2.9007, -3.0421, -2.8065, 0.5445, -3.0159)
@@ -80,21 +81,17 @@ class JointLimitState(NamedTuple):
     tau: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_joint_limits(buf, n_joints):
-    """(``JointLimitState`` as named views of ``buf``, the layout's length)."""
-    torque_max, o = _next(buf, 0, 1)
-    range_rad, o = _next(buf, o, 1)
-    q_min, o = _next(buf, o, n_joints)
-    q_max, o = _next(buf, o, n_joints)
-    tau, o = _next(buf, o, n_joints)
-    return JointLimitState(JointLimitParams(torque_max, range_rad), q_min, q_max, tau), o
+JOINT_LIMITS_LAYOUT = Layout.of(JointLimitState, dict(
+    params=Layout.of(JointLimitParams, slots("torque_max_nm range_rad")), q_min=N_JOINTS,
+    q_max=N_JOINTS, tau=N_JOINTS), dims={"n": "n_joints"}, args=("buf", "n_joints"))
+"""The joint-limit repulsion's part of the optional stages' buffer."""
+unpack_joint_limits = JOINT_LIMITS_LAYOUT.unpacker("unpack_joint_limits", __name__)
 
 
 def make_joint_limit_state(config: JointLimitConfig) -> Packed:
     """``config``, packed (``unpack_joint_limits`` names it; its joint count the scalars)."""
     n = len(config.q_min_rad)
-    packed = Packed(n, np.zeros(layout_size(unpack_joint_limits, n)))
+    packed = Packed(n, np.zeros(JOINT_LIMITS_LAYOUT.size_for(n)))
     st = unpack_joint_limits(packed.buffer, n)[0]
     st.params.torque_max_nm[0], st.params.range_rad[0] = config.torque_max_nm, config.range_rad
     st.q_min[:], st.q_max[:] = config.q_min_rad, config.q_max_rad

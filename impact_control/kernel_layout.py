@@ -2,11 +2,11 @@
 packing of a stage's state.
 
 A stage's state crosses from Python into numba *packed*: its scalar parameters (a small
-NamedTuple) and one float64 buffer holding all its arrays (``Packed``). Each stage's
-``unpack_*`` (``@njit``) is the one definition of its layout: it returns the named state
-(views of the buffer) and the layout's length. Passing one buffer per stage keeps the cost
-of every Python -> numba call low (each array crossing costs its unboxing), while the
-kernels and the stage classes read every field by name.
+NamedTuple) and one float64 buffer holding all its arrays (``Packed``). Each stage declares
+that buffer once, as a ``stage_layout.Layout``; its ``unpack_*`` (``@njit``), its length and
+its flag slots come from the declaration. Passing one buffer per stage keeps the cost of
+every Python -> numba call low (each array crossing costs its unboxing), while the kernels
+and the stage classes read every field by name.
 """
 
 from __future__ import annotations
@@ -77,24 +77,9 @@ def first_bad_input(q, dq, tau_meas, pos_target, quat_target, wrench_cmd, grippe
 
 
 # --------------------------------------------------------------------------- buffer layouts
-@njit(cache=True)
-def _next(buf, start, size):
-    """(buf[start:start + size], start + size)."""
-    return buf[start:start + size], start + size
-
-
 class Packed(NamedTuple):
     """A stage's state as it crosses into numba: ``scalars`` (its NamedTuple of scalar
-    parameters) and ``buffer`` (every array of it, float64, laid out by its ``unpack_*``)."""
+    parameters) and ``buffer`` (every array of it, float64, laid out by its ``Layout``)."""
 
     scalars: Any
     buffer: np.ndarray
-
-
-LAYOUT_PROBE = 1 << 16
-"""Length of the scratch buffer ``layout_size`` lays a stage out in (larger than any)."""
-
-
-def layout_size(unpack: Any, scalars: Any) -> int:
-    """Length of the buffer ``unpack`` lays out for ``scalars`` (its returned end offset)."""
-    return int(unpack(np.zeros(LAYOUT_PROBE), scalars)[1])

@@ -45,9 +45,7 @@ from impact_control.kernel_layout import (
     STORE,
     TRAIN,
     Packed,
-    _next,
     first_bad_input,
-    layout_size,
 )
 from impact_control.kernel_math import quat_normalized, regularized_wrench_map
 from impact_control.limits import torque_limiter, unpack_limiter
@@ -68,6 +66,7 @@ from impact_control.saturation_release import (
     saturation_release_step,
 )
 from impact_control.slow_filter import slow_filter_tick, unpack_slow_filter
+from impact_control.stage_layout import N_JOINTS, Layout, slots
 from impact_control.target_filter import target_filter_step
 from impact_control.wrench_observer import observer_update
 
@@ -88,6 +87,7 @@ class TickParams(NamedTuple):
         maps_shared: Whether both use the same lambda (one solve serves both).
         run_model: Whether the internal model runs (mode "impact" without the payload model).
         apply_feedforward: Whether its prediction is applied as feedforward.
+        n_joints: The arm's joint count (the maps' columns).
     """
 
     lambda_sq: float
@@ -95,6 +95,7 @@ class TickParams(NamedTuple):
     maps_shared: bool
     run_model: bool
     apply_feedforward: bool
+    n_joints: int
 
 
 class TickState(NamedTuple):
@@ -102,8 +103,12 @@ class TickState(NamedTuple):
 
     Attributes:
         params: ``TickParams``.
-        grams: (2, 6, 6) the estimator's and the projector's J J^T + lambda^2 I.
-        wrench_maps: (2, 6, 7) their (J J^T + lambda^2 I)^-1 J (one when shared).
+        estimator_gram: (6, 6) the wrench estimator's J J^T + lambda^2 I.
+        projector_gram: (6, 6) the null-space projector's J J^T + lambda_n^2 I.
+        estimator_map: (6, n) the estimator's (J J^T + lambda^2 I)^-1 J: joint torques to a
+            world wrench.
+        projector_map: (6, n) the projector's (J J^T + lambda_n^2 I)^-1 J (not computed when
+            ``maps_shared``: the estimator's serves).
         wrench_cmd: (6,) the commanded wrench of the tick [N, Nm].
         wrench_ff: (6,) the feedforward applied (the prediction on unmasked axes, the last
             unmasked tick's value on masked ones) [N, Nm].
@@ -117,8 +122,10 @@ class TickState(NamedTuple):
     """
 
     params: TickParams
-    grams: np.ndarray
-    wrench_maps: np.ndarray
+    estimator_gram: np.ndarray
+    projector_gram: np.ndarray
+    estimator_map: np.ndarray
+    projector_map: np.ndarray
     wrench_cmd: np.ndarray
     wrench_ff: np.ndarray
     wrench_extra: np.ndarray
@@ -131,34 +138,24 @@ class TickState(NamedTuple):
     payload_feedforward: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_tick(buf, params):
-    """(``TickState`` as named views of ``buf``, the layout's length)."""
-    grams, o = _next(buf, 0, 72)
-    wrench_maps, o = _next(buf, o, 84)
-    wrench_cmd, o = _next(buf, o, 6)
-    wrench_ff, o = _next(buf, o, 6)
-    wrench_extra, o = _next(buf, o, 6)
-    pos_error_norm, o = _next(buf, o, 1)
-    rot_error_norm, o = _next(buf, o, 1)
-    slow_rate, o = _next(buf, o, 1)
-    surprise, o = _next(buf, o, 1)
-    gate_open, o = _next(buf, o, 1)
-    learning_active, o = _next(buf, o, 1)
-    payload_feedforward, o = _next(buf, o, 1)
-    return TickState(params, grams.reshape((2, 6, 6)), wrench_maps.reshape((2, 6, 7)),
-                     wrench_cmd, wrench_ff, wrench_extra, pos_error_norm, rot_error_norm,
-                     slow_rate, surprise, gate_open, learning_active, payload_feedforward), o
+TICK_LAYOUT = Layout.of(TickState, dict(
+    estimator_gram=(6, 6), projector_gram=(6, 6), estimator_map=(6, N_JOINTS),
+    projector_map=(6, N_JOINTS), wrench_cmd=6, wrench_ff=6, wrench_extra=6,
+    **slots("pos_error_norm rot_error_norm slow_rate surprise gate_open learning_active "
+            "payload_feedforward")), dims={"n": "params.n_joints"}, args=("buf", "params"))
+"""The controller's own buffer (``params`` are all scalars)."""
+unpack_tick = TICK_LAYOUT.unpacker("unpack_tick", __name__)
 
 
 def make_tick_state(lambda_m: float, lambda_null_m: float, run_model: bool,
-                    payload_feedforward: bool = False) -> Packed:
+                    payload_feedforward: bool = False, n_joints: int = 7) -> Packed:
     """Estimator and projector regularizations, the model on/off, the payload model's
-    feedforward on/off (which skips the model); packed (``unpack_tick``)."""
+    feedforward on/off (which skips the model), for ``n_joints`` joints; packed
+    (``unpack_tick``)."""
     run_model = run_model and not payload_feedforward
     params = TickParams(lambda_m * lambda_m, lambda_null_m * lambda_null_m,
-                        lambda_null_m == lambda_m, run_model, run_model)
-    packed = Packed(params, np.zeros(layout_size(unpack_tick, params)))
+                        lambda_null_m == lambda_m, run_model, run_model, n_joints)
+    packed = Packed(params, np.zeros(TICK_LAYOUT.size_for(params)))
     unpack_tick(packed.buffer, params)[0].payload_feedforward[0] = float(payload_feedforward)
     return packed
 
@@ -209,7 +206,7 @@ def controller_tick(
     lim = unpack_limiter(state.lim.buffer, state.lim.scalars)[0]
     opt = state.opt.buffer  # optional stages: each named only on the ticks it runs
     model32, weights, biases, model = state.model32, state.weights, state.biases, state.model
-    par, grams, wrench_maps = tick.params, tick.grams, tick.wrench_maps
+    par, estimator_map = tick.params, tick.estimator_map
     if not quat_normalized(quat_target)[0]:
         return BAD_QUAT
     pos_t, quat_t = pos_target, quat_target
@@ -217,23 +214,24 @@ def controller_tick(
         tf = optional_target_filter(opt)
         target_filter_step(pos_target, quat_target, dyn.pos_ee_world, dyn.rot_ee_world, tf)
         pos_t, quat_t = tf.pos, tf.quat
-    regularized_wrench_map(dyn.jacobian, par.lambda_sq, grams[0], wrench_maps[0])
+    regularized_wrench_map(dyn.jacobian, par.lambda_sq, tick.estimator_gram, estimator_map)
     if not par.maps_shared:
-        regularized_wrench_map(dyn.jacobian, par.lambda_null_sq, grams[1], wrench_maps[1])
+        regularized_wrench_map(dyn.jacobian, par.lambda_null_sq, tick.projector_gram,
+                               tick.projector_map)
     if est.momentum:
-        momentum_update(dq, tau_meas, fric, dyn, wrench_maps[0], est.observer)
+        momentum_update(dq, tau_meas, fric, dyn, estimator_map, est.observer)
         wrench_ext = est.observer.wrench
     elif not observer_on(opt):
-        residual_update(dq, tau_meas, fric, dyn, wrench_maps[0], est.residual)
+        residual_update(dq, tau_meas, fric, dyn, estimator_map, est.residual)
         wrench_ext = est.residual.wrench
     else:  # the wrench observer takes the residual estimator's place (authors' presets)
         obs = optional_observer(opt)
-        observer_update(dq, tau_meas, dyn, wrench_maps[0], obs)
+        observer_update(dq, tau_meas, dyn, estimator_map, obs)
         wrench_ext = obs.wrench
     slow_rate = slow_filter_tick(wrench_ext, dyn.rot_ee_world, sf)
     flags = 0
     m = unpack_model(model)[0]
-    m32 = unpack_model32(model32, int(m.n_features[0]))
+    m32 = unpack_model32(model32, int(m.params.n_features[0]))
     pred = m.pred
     if par.run_model:
         push_features(q, dq, gripper_width, dyn.pos_ee_world, wrench_ext, m32, m)
@@ -254,7 +252,7 @@ def controller_tick(
         saturation_release_step(lim.output, lim.params.tau_max, dyn.pos_ee_world[2],
                                 tick.wrench_ff, tick.wrench_cmd, tick.wrench_extra,
                                 optional_saturation_release(opt))
-    wrench_map_null = wrench_maps[0] if par.maps_shared else wrench_maps[1]
+    wrench_map_null = estimator_map if par.maps_shared else tick.projector_map
     impedance_law(dyn, q, dq, pos_t, quat_t, wrench_map_null, tick.wrench_extra, imp)
     if joint_limits_on(opt):  # joint-limit repulsion, added as it is
         jl = optional_joint_limits(opt)

@@ -19,7 +19,8 @@ import numpy as np
 from numba import njit
 
 from impact_control.errors import InvalidArgumentError, check_choice
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
+from impact_control.stage_layout import N_JOINTS, Layout
 from impact_control.validation import check_len, check_positive
 
 LIBFRANKA_DELTA_T_S = 1e-3
@@ -140,12 +141,12 @@ class GravityRate(NamedTuple):
     last_with_gravity: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_gravity_rate(ext, n_joints):
-    """``GravityRate`` as named views of ``ext`` (its flag is slot 0)."""
-    on, o = _next(ext, 0, 1)
-    last, o = _next(ext, o, n_joints)
-    return GravityRate(on, last)
+GRAVITY_RATE_LAYOUT = Layout.of(GravityRate, dict(on=1, last_with_gravity=N_JOINTS),
+                                dims={"n": "n_joints"}, args=("ext", "n_joints"))
+"""The tail ``LimiterState.extra``."""
+unpack_gravity_rate = GRAVITY_RATE_LAYOUT.unpacker("unpack_gravity_rate", __name__,
+                                                   returns_length=False)
+gravity_rate_on = GRAVITY_RATE_LAYOUT.flag_reader("on", "gravity_rate_on", __name__)
 
 
 class LimiterScalars(NamedTuple):
@@ -157,16 +158,11 @@ class LimiterScalars(NamedTuple):
     n_joints: int
 
 
-@njit(cache=True, inline="always")
-def unpack_limiter(buf, sc):
-    """(``LimiterState`` as named views of ``buf``, the layout's length)."""
-    n = sc.n_joints
-    tau_max, o = _next(buf, 0, n)
-    last, o = _next(buf, o, n)
-    out, o = _next(buf, o, n)
-    extra, o = _next(buf, o, 1 + n)
-    params = LimiterParams(sc.max_delta_nm, sc.libfranka, sc.max_rate_nm_per_s, tau_max)
-    return LimiterState(params, last, out, extra), o
+LIMITER_LAYOUT = Layout.of(LimiterState, dict(
+    params=Layout.of(LimiterParams, dict(tau_max=N_JOINTS)), last_no_gravity=N_JOINTS,
+    output=N_JOINTS, extra=GRAVITY_RATE_LAYOUT.length), dims={"n": "sc.n_joints"})
+"""The limiter's buffer; its tail ``extra`` is ``GRAVITY_RATE_LAYOUT``."""
+unpack_limiter = LIMITER_LAYOUT.unpacker("unpack_limiter", __name__)
 
 
 def make_limiter_state(config: LimitsConfig, dt_s: float) -> Packed:
@@ -174,7 +170,7 @@ def make_limiter_state(config: LimitsConfig, dt_s: float) -> Packed:
     sc = LimiterScalars(float(config.torque_rate_max_nm_per_s * dt_s),
                         config.rate_limiter == "libfranka",
                         float(config.torque_rate_max_nm_per_s), len(config.torque_max_nm))
-    packed = Packed(sc, np.zeros(layout_size(unpack_limiter, sc)))
+    packed = Packed(sc, np.zeros(LIMITER_LAYOUT.size_for(sc)))
     st = unpack_limiter(packed.buffer, sc)[0]
     st.params.tau_max[:] = config.torque_max_nm
     unpack_gravity_rate(st.extra, sc.n_joints).on[0] = config.rate_limit_includes_gravity
@@ -237,7 +233,7 @@ def torque_limiter(tau_no_gravity, tau_gravity, st) -> None:
     """Rate-limit without gravity, add gravity, saturate; remember output - gravity.
     With ``with_gravity``: ``_limit_with_gravity`` instead."""
     par, last, out = st.params, st.last_no_gravity, st.output
-    if st.extra[0] != 0.0:  # GravityRate.on: the rate limit on the command with gravity
+    if gravity_rate_on(st.extra):  # the rate limit on the command with gravity
         _limit_with_gravity(tau_no_gravity, tau_gravity, st)
         return
     if par.libfranka:

@@ -2,7 +2,7 @@
 uses them: ``authors_sim``, ``authors_real``): target filter (``target_filter.py``), wrench
 observer (``wrench_observer.py``), payload model (``payload_model.py``) and joint-limit
 repulsion (``joint_limits.py``); and the saturated-lift release (``saturation_release.py``,
-issue 37 item 5: in no preset).
+issue 37 item 5: on in ``default``, off in the others).
 
 Each is a stage like the others (config, named state, layout, step, class), with two
 differences. Its constants live in its float64 buffer as (1,) views, not in a scalar
@@ -46,6 +46,7 @@ from impact_control.saturation_release import (
     make_saturation_release_state,
     unpack_saturation_release,
 )
+from impact_control.stage_layout import Layout, slots
 from impact_control.target_filter import (
     TargetFilter,
     TargetFilterConfig,
@@ -61,13 +62,38 @@ from impact_control.wrench_observer import (
     unpack_observer,
 )
 
-HEADER = 10
-"""Length of the shared buffer's header (``_header``): the joint count; where the target
-filter, the observer, the payload model, the joint limits and the saturation release end
-(offsets into the buffer); whether the target filter, the observer, the joint limits and the
-saturation release run (0 or 1; the payload
-model's flag is the tick's, ``TickState.payload_feedforward``, since it depends on the
-mode)."""
+
+class OptionalHeader(NamedTuple):
+    """The shared buffer's header, (1,) slots: the joint count; where the target filter, the
+    observer, the payload model, the joint limits and the saturation release end (offsets
+    into the buffer); whether the target filter, the observer, the joint limits and the
+    saturation release run (0 or 1; the payload model's flag is the tick's,
+    ``TickState.payload_feedforward``, since it depends on the mode)."""
+
+    n_joints: np.ndarray
+    target_filter_end: np.ndarray
+    observer_end: np.ndarray
+    payload_end: np.ndarray
+    joint_limits_end: np.ndarray
+    saturation_release_end: np.ndarray
+    target_filter_on: np.ndarray
+    observer_on: np.ndarray
+    joint_limits_on: np.ndarray
+    saturation_release_on: np.ndarray
+
+
+HEADER_LAYOUT = Layout.of(OptionalHeader, slots(" ".join(OptionalHeader._fields)),
+                          args=("buf",))
+"""The header's slots, in ``OptionalHeader``'s order."""
+HEADER = HEADER_LAYOUT.size()
+"""Length of the shared buffer's header."""
+_N, _TF_END, _OBS_END, _PAY_END, _JL_END, _SR_END = (
+    HEADER_LAYOUT.offset(name) for name in OptionalHeader._fields[:6])
+target_filter_on = HEADER_LAYOUT.flag_reader("target_filter_on", "target_filter_on", __name__)
+observer_on = HEADER_LAYOUT.flag_reader("observer_on", "observer_on", __name__)
+joint_limits_on = HEADER_LAYOUT.flag_reader("joint_limits_on", "joint_limits_on", __name__)
+saturation_release_on = HEADER_LAYOUT.flag_reader("saturation_release_on",
+                                                  "saturation_release_on", __name__)
 
 
 class OptionalState(NamedTuple):
@@ -82,33 +108,9 @@ class OptionalState(NamedTuple):
 
 @njit(cache=True, inline="always")
 def _header(buf):
-    """(n_joints, tf_end, obs_end, pay_end, jl_end, sr_end): the layout's definition
-    (``HEADER``)."""
-    return int(buf[0]), int(buf[1]), int(buf[2]), int(buf[3]), int(buf[4]), int(buf[5])
-
-
-@njit(cache=True, inline="always")
-def target_filter_on(buf) -> bool:
-    """Whether the target filter runs (header slot 6)."""
-    return buf[6] != 0.0
-
-
-@njit(cache=True, inline="always")
-def observer_on(buf) -> bool:
-    """Whether the wrench observer runs (header slot 7)."""
-    return buf[7] != 0.0
-
-
-@njit(cache=True, inline="always")
-def joint_limits_on(buf) -> bool:
-    """Whether the joint-limit repulsion runs (header slot 8)."""
-    return buf[8] != 0.0
-
-
-@njit(cache=True, inline="always")
-def saturation_release_on(buf) -> bool:
-    """Whether the saturated-lift release runs (header slot 9)."""
-    return buf[9] != 0.0
+    """(n_joints, tf_end, obs_end, pay_end, jl_end, sr_end) (``OptionalHeader``)."""
+    return (int(buf[_N]), int(buf[_TF_END]), int(buf[_OBS_END]), int(buf[_PAY_END]),
+            int(buf[_JL_END]), int(buf[_SR_END]))
 
 
 @njit(cache=True, inline="always")
@@ -183,8 +185,10 @@ class OptionalStages:
                                                n_joints).buffer.shape[0])
         ends = (HEADER + np.cumsum(sizes)).tolist()
         buf = np.zeros(ends[-1])
-        buf[:HEADER] = (n_joints, *ends, target_filter.enabled, observer.enabled,
-                        joint_limits.torque_max_nm > 0.0, saturation_release.enabled)
+        flags = (target_filter.enabled, observer.enabled, joint_limits.torque_max_nm > 0.0,
+                 saturation_release.enabled)
+        for name, value in zip(OptionalHeader._fields, (n_joints, *ends, *flags), strict=True):
+            buf[HEADER_LAYOUT.offset(name)] = value
         views = [buf[a:b] for a, b in zip([HEADER, *ends[:-1]], ends, strict=True)]
         self.target_filter = TargetFilter(target_filter, buffer=views[0])
         self.observer = WrenchObserver(observer, n_joints, buffer=views[1])

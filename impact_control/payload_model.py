@@ -36,7 +36,8 @@ import numpy as np
 from numba import njit
 
 from impact_control.errors import InvalidArgumentError, check_choice
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
+from impact_control.stage_layout import Layout, slots
 from impact_control.validation import check_positive, checked_gripper_command
 
 FEEDFORWARDS: tuple[str, ...] = ("estimate", "slow_wrench")
@@ -146,45 +147,22 @@ class PayloadState(NamedTuple):
     wrench_ff: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_payload(buf, n_joints):  # noqa: ARG001 - the optional stages' signature
-    """(``PayloadState`` as named views of ``buf``, the layout's length)."""
-    hold_on, o = _next(buf, 0, 1)
-    min_force, o = _next(buf, o, 1)
-    holdoff, o = _next(buf, o, 1)
-    reset_ratio, o = _next(buf, o, 1)
-    s_alpha, o = _next(buf, o, 1)
-    s_threshold, o = _next(buf, o, 1)
-    lr, o = _next(buf, o, 1)
-    e_max, o = _next(buf, o, 1)
-    rate_max, o = _next(buf, o, 1)
-    g_holdoff, o = _next(buf, o, 1)
-    g_open, o = _next(buf, o, 1)
-    ff_estimate, o = _next(buf, o, 1)
-    dt, o = _next(buf, o, 1)
-    params = PayloadParams(hold_on, min_force, holdoff, reset_ratio, s_alpha,
-                           s_threshold, lr, e_max, rate_max, g_holdoff, g_open, ff_estimate, dt)
-    gripper_cmd, o = _next(buf, o, 1)
-    holding, o = _next(buf, o, 1)
-    hold_time, o = _next(buf, o, 1)
-    checked, o = _next(buf, o, 1)
-    estimate, o = _next(buf, o, 1)
-    surprise, o = _next(buf, o, 1)
-    surprise_f, o = _next(buf, o, 1)
-    weight, o = _next(buf, o, 1)
-    rate, o = _next(buf, o, 1)
-    ff, o = _next(buf, o, 1)
-    prev, o = _next(buf, o, 6)
-    slow, o = _next(buf, o, 6)
-    w_ff, o = _next(buf, o, 6)
-    return PayloadState(params, gripper_cmd, holding, hold_time, checked, estimate, surprise,
-                        surprise_f, weight, rate, ff, prev, slow, w_ff), o
+PAYLOAD_LAYOUT = Layout.of(PayloadState, dict(
+    params=Layout.of(PayloadParams, slots(
+        "hold_on_n update_min_force_n holdoff_s reset_ratio surprise_alpha "
+        "surprise_threshold_n learning_rate estimate_max_n slow_rate_max gripper_holdoff "
+        "gripper_open_above feedforward_estimate dt_s")),
+    **slots("gripper_cmd holding hold_time_s reset_checked estimate_n surprise_n "
+            "surprise_filtered_n weight_n slow_rate feedforward_n"),
+    slow_prev_tcp=6, slow_tcp=6, wrench_ff=6), args=("buf", "n_joints"))
+"""The payload model's part of the optional stages' buffer."""
+unpack_payload = PAYLOAD_LAYOUT.unpacker("unpack_payload", __name__)
 
 
 def make_payload_state(config: PayloadModelConfig, dt_s: float, n_joints: int = 7) -> Packed:
     """``config`` at control period ``dt_s`` [s], packed (``unpack_payload`` names it)."""
     c = config
-    packed = Packed(n_joints, np.zeros(layout_size(unpack_payload, n_joints)))
+    packed = Packed(n_joints, np.zeros(PAYLOAD_LAYOUT.size()))
     st = unpack_payload(packed.buffer, n_joints)[0]
     values = (c.hold_on_n, c.update_min_force_n, c.feedforward_holdoff_s,
               c.reset_ratio, c.surprise_lowpass_alpha, c.surprise_threshold_n,

@@ -43,7 +43,8 @@ import numpy as np
 from numba import njit
 
 from impact_control.errors import InvalidArgumentError
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
+from impact_control.stage_layout import Layout, slots
 from impact_control.validation import check_positive
 
 
@@ -113,28 +114,18 @@ class SaturationReleaseState(NamedTuple):
     ff_unscaled: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_saturation_release(buf, n_joints):  # noqa: ARG001 - same signature as the others
-    """(``SaturationReleaseState`` as named views of ``buf``, the layout's length)."""
-    hold_ticks, o = _next(buf, 0, 1)
-    release_alpha, o = _next(buf, o, 1)
-    recover_alpha, o = _next(buf, o, 1)
-    margin_nm, o = _next(buf, o, 1)
-    rise_min_m, o = _next(buf, o, 1)
-    z_start, o = _next(buf, o, 1)
-    at_bound_ticks, o = _next(buf, o, 1)
-    scale, o = _next(buf, o, 1)
-    releases, o = _next(buf, o, 1)
-    ff_unscaled, o = _next(buf, o, 6)
-    return SaturationReleaseState(hold_ticks, release_alpha, recover_alpha, margin_nm,
-                                  rise_min_m, z_start, at_bound_ticks, scale, releases,
-                                  ff_unscaled), o
+SATURATION_RELEASE_LAYOUT = Layout.of(SaturationReleaseState, dict(
+    **slots("hold_ticks release_alpha recover_alpha margin_nm rise_min_m z_start "
+            "at_bound_ticks scale releases"), ff_unscaled=6), args=("buf", "n_joints"))
+"""The saturated-lift release's part of the optional stages' buffer."""
+unpack_saturation_release = SATURATION_RELEASE_LAYOUT.unpacker("unpack_saturation_release",
+                                                               __name__)
 
 
 def make_saturation_release_state(config: SaturationReleaseConfig, dt_s: float,
                                   n_joints: int = 7) -> Packed:
     """``config`` at control period ``dt_s`` [s], packed (``unpack_saturation_release``)."""
-    packed = Packed(n_joints, np.zeros(layout_size(unpack_saturation_release, n_joints)))
+    packed = Packed(n_joints, np.zeros(SATURATION_RELEASE_LAYOUT.size()))
     st = unpack_saturation_release(packed.buffer, n_joints)[0]
     st.hold_ticks[0] = float(round(config.hold_s / dt_s))
     st.margin_nm[0] = config.margin_nm

@@ -24,14 +24,15 @@ import numpy as np
 from numba import njit
 
 from impact_control.errors import InvalidArgumentError, check_choice
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
 from impact_control.slow_filter_options import (
-    EXTRA_SIZE,
+    SLOW_FILTER_EXTRA_LAYOUT,
     options_on,
     unpack_slow_filter_extra,
     update_with_options,
     write_slow_filter_options,
 )
+from impact_control.stage_layout import Layout
 from impact_control.validation import FRAMES, check_optional_positive, check_positive
 
 _EYE3 = np.eye(3)
@@ -131,18 +132,11 @@ class SlowFilterScalars(NamedTuple):
     inv_max_force_slew: float
 
 
-@njit(cache=True, inline="always")
-def unpack_slow_filter(buf, sc):
-    """(``SlowFilterState`` as named views of ``buf``, the layout's length)."""
-    eta, o = _next(buf, 0, 6)
-    gain, o = _next(buf, o, 6)
-    clip, o = _next(buf, o, 6)
-    wrench_slow, o = _next(buf, o, 6)
-    rate, o = _next(buf, o, 6)
-    slow_rate, o = _next(buf, o, 1)
-    extra, o = _next(buf, o, EXTRA_SIZE)
-    params = SlowFilterParams(eta, gain, clip, sc.inv_max_force_slew)
-    return SlowFilterState(params, wrench_slow, rate, slow_rate, extra), o
+SLOW_FILTER_LAYOUT = Layout.of(SlowFilterState, dict(
+    params=Layout.of(SlowFilterParams, dict(eta_per_s=6, gain=6, clip=6)), wrench_slow=6,
+    rate=6, slow_rate=1, extra=SLOW_FILTER_EXTRA_LAYOUT.length))
+"""The filter's buffer; its tail ``extra`` is ``SLOW_FILTER_EXTRA_LAYOUT``."""
+unpack_slow_filter = SLOW_FILTER_LAYOUT.unpacker("unpack_slow_filter", __name__)
 
 
 def make_slow_filter_state(config: SlowWrenchConfig, dt_s: float) -> Packed:
@@ -150,7 +144,7 @@ def make_slow_filter_state(config: SlowWrenchConfig, dt_s: float) -> Packed:
     f, t = config.rate_force_per_s, config.rate_torque_per_s
     cf, ct = config.clip_force_n, config.clip_torque_nm
     sc = SlowFilterScalars(1.0 / config.max_force_slew_n_per_s)
-    packed = Packed(sc, np.zeros(layout_size(unpack_slow_filter, sc)))
+    packed = Packed(sc, np.zeros(SLOW_FILTER_LAYOUT.size()))
     st = unpack_slow_filter(packed.buffer, sc)[0]
     write_slow_filter_options(unpack_slow_filter_extra(st.extra), config.options_on,
                               config.frame == "tcp", config.leak_per_s * dt_s,

@@ -21,12 +21,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from impact_control.kernel_layout import _next
 from impact_control.kernel_math import clamp_norm3, rotate, rotate_back
-
-EXTRA_SIZE = 5 + 6 + 6
-"""Length of ``unpack_slow_filter_extra``'s layout (tests/control/test_slow_filter.py checks
-it)."""
+from impact_control.stage_layout import Layout
 
 
 class SlowFilterExtra(NamedTuple):
@@ -50,23 +46,13 @@ class SlowFilterExtra(NamedTuple):
     wrench_in: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_slow_filter_extra(ext):
-    """``SlowFilterExtra`` as named views of ``ext``."""
-    on, o = _next(ext, 0, 1)
-    tcp_frame, o = _next(ext, o, 1)
-    leak_scale, o = _next(ext, o, 1)
-    force_max, o = _next(ext, o, 1)
-    torque_max, o = _next(ext, o, 1)
-    kept, o = _next(ext, o, 6)
-    wrench_in, o = _next(ext, o, 6)
-    return SlowFilterExtra(on, tcp_frame, leak_scale, force_max, torque_max, kept, wrench_in)
-
-
-@njit(cache=True, inline="always")
-def options_on(ext) -> bool:
-    """``SlowFilterExtra.on`` (slot 0), read without building the views."""
-    return ext[0] != 0.0
+SLOW_FILTER_EXTRA_LAYOUT = Layout.of(SlowFilterExtra, dict(
+    on=1, tcp_frame=1, leak_scale=1, force_norm_max_n=1, torque_norm_max_nm=1, wrench_kept=6,
+    wrench_in=6), args=("ext",))
+"""The options' tail of the filter's buffer."""
+unpack_slow_filter_extra = SLOW_FILTER_EXTRA_LAYOUT.unpacker(
+    "unpack_slow_filter_extra", __name__, returns_length=False)
+options_on = SLOW_FILTER_EXTRA_LAYOUT.flag_reader("on", "options_on", __name__)
 
 
 def write_slow_filter_options(x: SlowFilterExtra, on: bool, tcp_frame: bool,

@@ -24,9 +24,10 @@ import numpy as np
 from numba import njit
 
 from impact_control.errors import InvalidArgumentError, check_choice
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
 from impact_control.kernel_math import matrix_to_quat, quat_normalized
 from impact_control.se3 import quat_mul, quat_rotate, se3_exp, se3_log
+from impact_control.stage_layout import Layout, slots
 
 SPACES: tuple[str, ...] = ("se3_log", "geodesic")
 """Valid ``TargetFilterConfig.space`` values."""
@@ -85,25 +86,16 @@ class TargetFilterState(NamedTuple):
     rel_quat: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_target_filter(buf, n_joints):  # noqa: ARG001 - the optional stages' signature
-    """(``TargetFilterState`` as named views of ``buf``, the layout's length)."""
-    weight_new, o = _next(buf, 0, 1)
-    geodesic, o = _next(buf, o, 1)
-    started, o = _next(buf, o, 1)
-    pos, o = _next(buf, o, 3)
-    quat, o = _next(buf, o, 4)
-    xi_f, o = _next(buf, o, 6)
-    xi_t, o = _next(buf, o, 6)
-    rel_pos, o = _next(buf, o, 3)
-    rel_quat, o = _next(buf, o, 4)
-    params = TargetFilterParams(weight_new, geodesic)
-    return TargetFilterState(params, started, pos, quat, xi_f, xi_t, rel_pos, rel_quat), o
+TARGET_FILTER_LAYOUT = Layout.of(TargetFilterState, dict(
+    params=Layout.of(TargetFilterParams, slots("weight_new geodesic")), started=1, pos=3,
+    quat=4, xi_filtered=6, xi_target=6, rel_pos=3, rel_quat=4), args=("buf", "n_joints"))
+"""The target filter's part of the optional stages' buffer."""
+unpack_target_filter = TARGET_FILTER_LAYOUT.unpacker("unpack_target_filter", __name__)
 
 
 def make_target_filter_state(config: TargetFilterConfig, n_joints: int = 7) -> Packed:
     """``config``, packed (``unpack_target_filter`` names it; ``n_joints`` its scalars)."""
-    packed = Packed(n_joints, np.zeros(layout_size(unpack_target_filter, n_joints)))
+    packed = Packed(n_joints, np.zeros(TARGET_FILTER_LAYOUT.size()))
     par = unpack_target_filter(packed.buffer, n_joints)[0].params
     par.weight_new[0] = config.weight_new
     par.geodesic[0] = config.space == "geodesic"

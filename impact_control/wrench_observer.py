@@ -22,8 +22,9 @@ import numpy as np
 from numba import njit
 
 from impact_control.errors import InvalidArgumentError, check_choice
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
 from impact_control.kernel_math import clamp_norm3, mat_vec, rotate, rotate_back
+from impact_control.stage_layout import N_JOINTS, Layout, slots
 from impact_control.validation import FRAMES, check_optional_positive
 
 
@@ -97,27 +98,18 @@ class ObserverState(NamedTuple):
     scratch: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_observer(buf, n_joints):
-    """(``ObserverState`` as named views of ``buf``, the layout's length)."""
-    alpha, o = _next(buf, 0, 1)
-    force_max, o = _next(buf, o, 1)
-    torque_max, o = _next(buf, o, 1)
-    warmup, o = _next(buf, o, 1)
-    tcp_frame, o = _next(buf, o, 1)
-    ticks, o = _next(buf, o, 1)
-    tau_res, o = _next(buf, o, n_joints)
-    raw, o = _next(buf, o, 6)
-    filtered, o = _next(buf, o, 6)
-    wrench, o = _next(buf, o, 6)
-    scratch, o = _next(buf, o, 6)
-    params = ObserverParams(alpha, force_max, torque_max, warmup, tcp_frame)
-    return ObserverState(params, ticks, tau_res, raw, filtered, wrench, scratch), o
+OBSERVER_LAYOUT = Layout.of(ObserverState, dict(
+    params=Layout.of(ObserverParams, slots(
+        "alpha force_norm_max_n torque_norm_max_nm warmup_ticks tcp_frame")),
+    ticks=1, tau_residual=N_JOINTS, wrench_raw=6, wrench_filtered=6, wrench=6, scratch=6),
+    dims={"n": "n_joints"}, args=("buf", "n_joints"))
+"""The wrench observer's part of the optional stages' buffer."""
+unpack_observer = OBSERVER_LAYOUT.unpacker("unpack_observer", __name__)
 
 
 def make_observer_state(config: WrenchObserverConfig, n_joints: int = 7) -> Packed:
     """``config`` for ``n_joints`` joints, packed (``unpack_observer`` names it)."""
-    packed = Packed(n_joints, np.zeros(layout_size(unpack_observer, n_joints)))
+    packed = Packed(n_joints, np.zeros(OBSERVER_LAYOUT.size_for(n_joints)))
     par, inf = unpack_observer(packed.buffer, n_joints)[0].params, float("inf")
     par.alpha[0] = config.lowpass_alpha_per_tick
     par.force_norm_max_n[0] = (inf if config.force_norm_max_n is None

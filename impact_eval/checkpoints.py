@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 from pathlib import Path
@@ -39,3 +40,34 @@ def checkpoint_dir(env_id: str, variant: str) -> Path:
             f"(train one with impact-train or set ${CHECKPOINTS_ENV_VAR})"
         )
     return path
+
+
+FINGERPRINT_SKIPS = ("meta.json",)
+"""Checkpoint files a fingerprint leaves out: ``impact-eval`` stamps its evaluation into
+``meta.json`` (``stamp.py``), which changes no action."""
+
+
+def fingerprint(path: Path) -> str:
+    """sha256 over a checkpoint directory's files (relative name and bytes, in name order),
+    ``FINGERPRINT_SKIPS`` left out."""
+    digest = hashlib.sha256()
+    for file in sorted(p for p in path.rglob("*") if p.is_file()):
+        if file.name in FINGERPRINT_SKIPS:
+            continue
+        digest.update(file.relative_to(path).as_posix().encode() + b"\0")
+        digest.update(file.read_bytes())
+    return digest.hexdigest()
+
+
+def policy_checkpoint(env_id: str, policy: str | None) -> Path | None:
+    """The checkpoint directory a policy component (``method_parts.POLICY_FORMS``) loads;
+    None for one without a checkpoint (a scripted expert, a plugin's factory)."""
+    if policy is None or "." not in policy or policy.startswith("scripted"):
+        return None
+    kind, _, variant = policy.partition(".")
+    if kind == "dp" and variant == "nominal":
+        try:
+            return checkpoint_dir(env_id, "impact")
+        except CheckpointError:
+            variant = "vanilla"
+    return checkpoint_dir(env_id, variant)

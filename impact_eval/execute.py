@@ -73,6 +73,8 @@ def execute(plan: Plan, command: list[str], args: dict[str, object]) -> Result:
         "git": runinfo.git_state(),
         "status": "running",
     }
+    if plan.config.options.allow_code_change:
+        invocation["allow_code_change"] = True
     record["invocations"].append(invocation)
     runinfo.write_identity(plan.out, plan.identity)
     runinfo.write_run_json(plan.out, record)

@@ -14,6 +14,8 @@ from pathlib import Path
 from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_eval import csvio, runinfo
 from impact_eval.bins import bin_param_name
+from impact_eval.checkpoints import fingerprint, policy_checkpoint
+from impact_eval.code_check import check_same_code
 from impact_eval.envs import (
     EnvInfo,
     check_env_id,
@@ -152,6 +154,15 @@ def _build_policies(sweep: SweepSpec, methods: list[MethodSpec], env_id: str) ->
             env.close()
 
 
+def _fingerprints(methods: list[MethodSpec], env_id: str) -> dict[str, str | None]:
+    """Each method's checkpoint fingerprint (None: it loads none)."""
+    out: dict[str, str | None] = {}
+    for m in methods:
+        path = policy_checkpoint(env_id, m.policy)
+        out[m.name] = None if path is None else fingerprint(path)
+    return out
+
+
 def prepare(spec: SweepSpec, options: RunOptions) -> Plan:
     """Check a sweep against its env and output directory without creating any file (the
     checks that need no env were made when ``spec`` and ``options`` were built)."""
@@ -169,8 +180,10 @@ def prepare(spec: SweepSpec, options: RunOptions) -> Plan:
         env=spec.env_id, seed=spec.seed, param_name=info.param_name,
         controller_overrides=spec.controller_overrides, robot_overrides=spec.robot_overrides,
         methods=spec.methods, values=spec.values, episodes=spec.episodes,
-        method_controllers={m.name: m.settings for m in methods}, bin_highs=spec.bin_highs)
+        method_controllers={m.name: m.settings for m in methods}, bin_highs=spec.bin_highs,
+        policy_fingerprints=_fingerprints(methods, info.env_id))
     if continuing:
+        check_same_code(previous, runinfo.git_state(), options.allow_code_change)
         csv_path = options.out / EPISODES_CSV
         has_rows = csv_path.exists() and bool(csvio.read_rows(csv_path))
         runinfo.check_resumable(runinfo.recorded_identity(options.out), identity,

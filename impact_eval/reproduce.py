@@ -157,7 +157,7 @@ def rerun(table: Table, cells: set[Cell] | None, a: argparse.Namespace, out: Pat
     try:
         if cells is not None:
             seed_scratch(table, out, cells)
-            argv.append("--resume")
+            argv += ["--resume", "--allow-code-change"]  # committed rows, checked byte by byte
         run_sweep_command(argv)
     except BaseException:  # an error, Ctrl-C or SIGTERM: no partial rerun is left
         if created is not None:

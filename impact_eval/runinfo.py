@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import subprocess
@@ -11,6 +12,7 @@ from pathlib import Path
 from impact_control.errors import InvalidArgumentError
 from impact_control.runinfo import host_info, utc_now  # noqa: F401 - run.json fields, re-exported
 from impact_control.runinfo import package_versions as control_package_versions
+from impact_eval.code_check import check_fingerprints
 
 RUN_JSON = "run.json"
 IDENTITY_JSON = "identity.json"
@@ -36,8 +38,14 @@ def package_versions() -> dict[str, str | None]:
     return control_package_versions(PACKAGES)
 
 
+NOT_CODE = ("results", "docs")
+"""Folders whose uncommitted changes do not change a row (``git_state``'s ``code_diff``)."""
+
+
 def git_state() -> dict[str, object]:
-    """``{"sha": …, "dirty": …}`` of the checkout holding this package, ``None``s outside git."""
+    """``{"sha": …, "dirty": …, "code_diff": …}`` of the checkout holding this package
+    (``None``s outside git): ``dirty`` whether any tracked file differs from HEAD,
+    ``code_diff`` the sha256 of ``git diff HEAD`` outside ``NOT_CODE`` (None: no change)."""
     repo = Path(__file__).resolve().parent.parent
 
     def git(*args: str) -> str | None:
@@ -55,7 +63,9 @@ def git_state() -> dict[str, object]:
 
     sha = git("rev-parse", "HEAD")
     status = git("status", "--porcelain", "--untracked-files=no") if sha else None
-    return {"sha": sha, "dirty": None if status is None else bool(status)}
+    diff = git("diff", "HEAD", "--", ".", *(f":(exclude){d}" for d in NOT_CODE)) if sha else None
+    return {"sha": sha, "dirty": None if status is None else bool(status),
+            "code_diff": hashlib.sha256(diff.encode()).hexdigest() if diff else None}
 
 
 def _read_object(path: Path) -> dict | None:
@@ -122,6 +132,9 @@ class RunIdentity:
     controller cannot resume the earlier rows)."""
     bin_highs: tuple[float, ...] = ()
     """``--mass-bins``: each bin's upper edge (``values``: their lower edges); empty: a grid."""
+    policy_fingerprints: dict[str, str | None] = field(default_factory=dict)
+    """Per method: sha256 of the checkpoint it loads (``checkpoints.fingerprint``; None:
+    none, e.g. a scripted expert)."""
     robot_overrides: tuple[str, ...] = ()
     """``--robot-set``; a run recorded before the option existed had none."""
 
@@ -129,6 +142,8 @@ class RunIdentity:
 _EXTENDABLE = ("methods", "values", "bin_highs")
 _ADDED_LATER: dict[str, list] = {"robot_overrides": []}
 """Identity keys that runs recorded before them lack, with the value those runs had."""
+_CHECKED_APART = ("method_controllers", "policy_fingerprints")
+"""Identity keys compared per method (``_check_controllers``, ``check_fingerprints``)."""
 REQUIRED_KEYS = ("env", "seed", "methods", "values", "episodes")
 """Keys without which a recorded identity cannot be checked (then ``--resume`` refuses)."""
 
@@ -150,9 +165,10 @@ def check_resumable(recorded: dict | None, now: RunIdentity, extend: bool = Fals
                 "restore run.json or use another --out")
         return
     _check_controllers(recorded.get("method_controllers"), now.method_controllers)
+    check_fingerprints(recorded.get("policy_fingerprints"), now.policy_fingerprints)
     args = recorded
     for key, value in asdict(now).items():
-        if key == "method_controllers" or (key not in args and key not in _ADDED_LATER):
+        if key in _CHECKED_APART or (key not in args and key not in _ADDED_LATER):
             continue
         was = args.get(key, _ADDED_LATER.get(key))
         now_list = list(value) if isinstance(value, tuple) else value

@@ -188,6 +188,9 @@ class RunOptions:
     """``local`` or ``ray`` (``--executor``)."""
     ray_address: str | None = None
     """The Ray cluster to join (``--ray-address``; ``ray`` only)."""
+    allow_code_change: bool = False
+    """Resume even if other code wrote the earlier rows (``--allow-code-change``;
+    ``code_check.py``)."""
 
     def __post_init__(self) -> None:
         _at_least("--workers", self.workers, 1)

@@ -134,6 +134,12 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         "episode) rows already written",
     )
     p.add_argument(
+        "--allow-code-change",
+        action="store_true",
+        help="with --resume/--extend: continue even if another commit or other uncommitted "
+        "changes wrote the earlier rows (recorded in run.json)",
+    )
+    p.add_argument(
         "--extend",
         action="store_true",
         help="continue OUT adding methods or grid values (every earlier one kept, same "
@@ -231,7 +237,8 @@ def _run_sweep(a: argparse.Namespace, argv: Sequence[str]) -> int:
     spec = SweepSpec.from_cli(a)
     options = RunOptions(out=a.out, workers=a.workers, envs_per_worker=a.envs_per_worker,
                          resume=a.resume, extend=a.extend, video_episodes=a.video,
-                         executor=a.executor, ray_address=a.ray_address)
+                         executor=a.executor, ray_address=a.ray_address,
+                         allow_code_change=a.allow_code_change)
     plan = prepare(spec, options)
     t0 = time.perf_counter()
     result = execute(plan, command=[PROG, *argv], args=vars(a))

@@ -9,30 +9,23 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from impact_control.kernel_layout import LAYOUT_PROBE, STORE, TRAIN, _next
+from impact_control.kernel_layout import STORE, TRAIN
+from impact_control.stage_layout import Dim, Layout, slots
 
 
-class ModelState(NamedTuple):
-    """The internal model's float64 state as named views (``unpack_model``): parameters and
-    per-tick state are (1,) arrays (written by name from Python; the kernels read ``[0]``).
+class ModelParams(NamedTuple):
+    """The internal model's configuration, (1,) views (written once from its config).
 
     Attributes:
-        max_hidden: Widest hidden layer (sizes ``acts``).
+        max_hidden: Widest hidden layer (sizes ``ModelState.acts``; the buffer's first slot).
         open_n, release_n: The surprise gate's thresholds [N].
         slow_rate_max: Largest slow-wrench rate at which the gate may open or a sample be
             stored (dimensionless).
         replay_period: Ticks between replay inserts.
         update_every: Ticks between SGD steps while learning.
-        learning_enabled: 0 freezes learning (and the gate).
         history_length: L, ticks of history in the input.
         n_features: F, features per tick.
-        head, filled: History ring position and whether it has been filled once.
-        tick: Ticks since the reset (schedules inserts and steps).
-        gate_open, surprise, learning_active: The gate, the last surprise [N], whether the
-            last tick learned.
         out_scale: (6,) output scale of the network [N, Nm].
-        pred: (6,) the prediction w_pred [N, Nm], world frame.
-        acts: (2 x max hidden,) hidden activations (ping-pong).
     """
 
     max_hidden: np.ndarray
@@ -41,52 +34,53 @@ class ModelState(NamedTuple):
     slow_rate_max: np.ndarray
     replay_period: np.ndarray
     update_every: np.ndarray
-    learning_enabled: np.ndarray
     history_length: np.ndarray
     n_features: np.ndarray
+    out_scale: np.ndarray
+
+
+class ModelState(NamedTuple):
+    """The internal model's float64 buffer as named views (``unpack_model``): its
+    configuration (``params``) and its runtime state, (1,) views for scalars (written by
+    name from Python; the kernels read ``[0]``).
+
+    Attributes:
+        params: ``ModelParams``.
+        learning_enabled: 0 freezes learning (and the gate); a switch, not configuration.
+        head, filled: History ring position and whether it has been filled once.
+        tick: Ticks since the reset (schedules inserts and steps).
+        gate_open, surprise, learning_active: The gate, the last surprise [N], whether the
+            last tick learned.
+        pred: (6,) the prediction w_pred [N, Nm], world frame.
+        acts: (2 x max hidden,) hidden activations (ping-pong).
+    """
+
+    params: ModelParams
+    learning_enabled: np.ndarray
     head: np.ndarray
     filled: np.ndarray
     tick: np.ndarray
     gate_open: np.ndarray
     surprise: np.ndarray
     learning_active: np.ndarray
-    out_scale: np.ndarray
     pred: np.ndarray
     acts: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_model(buf):
-    """(``ModelState`` as named views of ``buf``, the layout's length): the one definition
-    of the layout; ``max_hidden`` (the first slot) sizes ``acts``."""
-    max_hidden, o = _next(buf, 0, 1)
-    open_n, o = _next(buf, o, 1)
-    release_n, o = _next(buf, o, 1)
-    slow_rate_max, o = _next(buf, o, 1)
-    replay_period, o = _next(buf, o, 1)
-    update_every, o = _next(buf, o, 1)
-    learning_enabled, o = _next(buf, o, 1)
-    history_length, o = _next(buf, o, 1)
-    n_features, o = _next(buf, o, 1)
-    head, o = _next(buf, o, 1)
-    filled, o = _next(buf, o, 1)
-    tick, o = _next(buf, o, 1)
-    gate_open, o = _next(buf, o, 1)
-    surprise, o = _next(buf, o, 1)
-    learning_active, o = _next(buf, o, 1)
-    out_scale, o = _next(buf, o, 6)
-    pred, o = _next(buf, o, 6)
-    acts, o = _next(buf, o, 2 * int(max_hidden[0]))
-    return ModelState(max_hidden, open_n, release_n, slow_rate_max, replay_period,
-                      update_every, learning_enabled, history_length, n_features, head, filled,
-                      tick, gate_open, surprise, learning_active, out_scale, pred, acts), o
+_HIDDEN = Dim.named("hidden")
+MODEL_LAYOUT = Layout.of(ModelState, dict(
+    params=Layout.of(ModelParams, dict(
+        **slots("max_hidden open_n release_n slow_rate_max replay_period update_every "
+                "history_length n_features"), out_scale=6)),
+    **slots("learning_enabled head filled tick gate_open surprise learning_active"),
+    pred=6, acts=2 * _HIDDEN), dims={"hidden": "int(buf[0])"}, args=("buf",))
+"""The internal model's float64 buffer; ``max_hidden`` (slot 0) sizes ``acts``."""
+unpack_model = MODEL_LAYOUT.unpacker("unpack_model", __name__)
 
 
 def model_size(max_hidden: int) -> int:
-    """Length of the internal model's float64 buffer (``unpack_model``'s layout)."""
-    probe = np.zeros(LAYOUT_PROBE)
-    probe[0] = max_hidden
-    return int(unpack_model(probe)[1])
+    """Length of the internal model's float64 buffer (``MODEL_LAYOUT``)."""
+    return MODEL_LAYOUT.size(hidden=max_hidden)
 
 
 class Model32State(NamedTuple):
@@ -102,18 +96,18 @@ class Model32State(NamedTuple):
     hist: np.ndarray
 
 
+_FEATURES, _HISTORY = Dim.named("f"), Dim.named("hist")
+MODEL32_LAYOUT = Layout.of(Model32State, dict(
+    offset=_FEATURES, inv_scale=_FEATURES, hist=_HISTORY),
+    dims={"f": "n_features", "hist": "buf32.shape[0] - 2 * n_features"},
+    args=("buf32", "n_features"))
+"""The internal model's float32 buffer (the history fills what the normalization leaves)."""
+unpack_model32 = MODEL32_LAYOUT.unpacker("unpack_model32", __name__, returns_length=False)
+
+
 def model32_size(history_length: int, n_features: int) -> int:
-    """Length of the internal model's float32 buffer."""
-    return (2 + 2 * history_length) * n_features
-
-
-@njit(cache=True, inline="always")
-def unpack_model32(buf32, n_features):
-    """``Model32State`` as named views of the float32 buffer."""
-    offset, o = _next(buf32, 0, n_features)
-    inv_scale, o = _next(buf32, o, n_features)
-    hist, o = _next(buf32, o, buf32.shape[0] - o)
-    return Model32State(offset, inv_scale, hist)
+    """Length of the internal model's float32 buffer: 2 L rows of F in the history."""
+    return MODEL32_LAYOUT.size(f=n_features, hist=2 * history_length * n_features)
 
 
 @njit(cache=True)
@@ -133,7 +127,7 @@ def push_features(q, dq, gripper_width, pos_ee, wrench_ext, m32, m) -> None:
     is the contiguous block of rows head+1 .. head+L; the first push after a reset fills every
     row.
     """
-    n_rows, n_feat = int(m.history_length[0]), int(m.n_features[0])
+    n_rows, n_feat = int(m.params.history_length[0]), int(m.params.n_features[0])
     offset, inv_scale, hist = m32.offset, m32.inv_scale, m32.hist
     h = int(m.head[0])
     row = hist[h * n_feat:(h + 1) * n_feat]
@@ -193,13 +187,13 @@ def mlp_forward(x, weights, biases, acts, out) -> None:
 @njit(cache=True, inline="always")
 def model_predict(m32, weights, biases, m) -> None:
     """Forward pass on the current history window (all zeros before the first push)."""
-    n_rows, n_feat = int(m.history_length[0]), int(m.n_features[0])
+    n_rows, n_feat = int(m.params.history_length[0]), int(m.params.n_features[0])
     hist = m32.hist
     start = ((int(m.head[0]) + n_rows - 1) % n_rows + 1) * n_feat
     pred = m.pred
     mlp_forward(hist[start:start + n_rows * n_feat], weights, biases, m.acts, pred)
     for i in range(pred.shape[0]):
-        pred[i] *= m.out_scale[i]
+        pred[i] *= m.params.out_scale[i]
 
 
 @njit(cache=True)
@@ -228,15 +222,16 @@ def model_gate_step(wrench_slow, slow_rate, mask, m) -> int:
     m.learning_active[0] = 0.0
     if m.learning_enabled[0] == 0.0:  # learning disabled: the gate is frozen too
         return 0
-    is_open, learn = gate_update(m.gate_open[0] != 0.0, m.surprise[0], slow_rate, m.open_n[0],
-                                 m.release_n[0], m.slow_rate_max[0])
+    par = m.params
+    is_open, learn = gate_update(m.gate_open[0] != 0.0, m.surprise[0], slow_rate, par.open_n[0],
+                                 par.release_n[0], par.slow_rate_max[0])
     m.gate_open[0] = 1.0 if is_open else 0.0
     m.learning_active[0] = 1.0 if learn else 0.0
     tick = int(m.tick[0])
     m.tick[0] = tick + 1
     flags = 0
-    if tick % int(m.replay_period[0]) == 0 and slow_rate <= m.slow_rate_max[0]:
+    if tick % int(par.replay_period[0]) == 0 and slow_rate <= par.slow_rate_max[0]:
         flags |= STORE
-    if learn and (tick + 1) % int(m.update_every[0]) == 0:
+    if learn and (tick + 1) % int(par.update_every[0]) == 0:
         flags |= TRAIN
     return flags

@@ -27,7 +27,8 @@ from impact_control.internal_model.kernels import (
     dense,
     tanh_inplace,
 )
-from impact_control.kernel_layout import LAYOUT_PROBE, STORE, TRAIN, _next
+from impact_control.kernel_layout import STORE, TRAIN
+from impact_control.stage_layout import Layout, slots
 
 DIVERGED = 32
 """Status bit: the SGD step just applied left a non-finite loss or weight (Python then
@@ -35,55 +36,56 @@ re-initialises the model, ``InternalModel.n_divergences``)."""
 
 
 
-class LearnerCounters(NamedTuple):
-    """The learner's scalars, as named (1,) float64 views of ``LearnerArrays.scal``
-    (``unpack_counters``, the one definition of that buffer's layout).
+class LearnerParams(NamedTuple):
+    """The learner's configuration, (1,) float64 views of ``LearnerArrays.scal``.
 
     Attributes:
-        count: Samples in the replay ring.
-        head: Ring slot the next sample goes to.
-        pending: Samples in the SGD step in progress (0: none).
-        next_row: Next batch row to process.
-        n_updates: SGD steps applied.
-        loss: Sum of squared masked errors of the step in progress.
         learning_rate: SGD learning rate.
         batch_size: Rows of an SGD step (the current sample and replayed ones).
         samples_per_tick: Rows processed per tick.
         in_kernel: 1 when the learner runs in the kernel, 0 when in Python (``"numpy"``).
     """
 
-    count: np.ndarray
-    head: np.ndarray
-    pending: np.ndarray
-    next_row: np.ndarray
-    n_updates: np.ndarray
-    loss: np.ndarray
     learning_rate: np.ndarray
     batch_size: np.ndarray
     samples_per_tick: np.ndarray
     in_kernel: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_counters(scal):
-    """(``LearnerCounters`` as named views of ``scal``, the layout's length)."""
-    count, o = _next(scal, 0, 1)
-    head, o = _next(scal, o, 1)
-    pending, o = _next(scal, o, 1)
-    next_row, o = _next(scal, o, 1)
-    n_updates, o = _next(scal, o, 1)
-    loss, o = _next(scal, o, 1)
-    learning_rate, o = _next(scal, o, 1)
-    batch_size, o = _next(scal, o, 1)
-    samples_per_tick, o = _next(scal, o, 1)
-    in_kernel, o = _next(scal, o, 1)
-    return LearnerCounters(count, head, pending, next_row, n_updates, loss, learning_rate,
-                           batch_size, samples_per_tick, in_kernel), o
+class LearnerCounters(NamedTuple):
+    """The learner's scalars, as named (1,) float64 views of ``LearnerArrays.scal``
+    (``COUNTERS_LAYOUT``): its configuration (``params``) and its runtime counters.
+
+    Attributes:
+        params: ``LearnerParams``.
+        count: Samples in the replay ring.
+        head: Ring slot the next sample goes to.
+        pending: Samples in the SGD step in progress (0: none).
+        next_row: Next batch row to process.
+        n_updates: SGD steps applied.
+        loss: Sum of squared masked errors of the step in progress.
+    """
+
+    params: LearnerParams
+    count: np.ndarray
+    head: np.ndarray
+    pending: np.ndarray
+    next_row: np.ndarray
+    n_updates: np.ndarray
+    loss: np.ndarray
+
+
+COUNTERS_LAYOUT = Layout.of(LearnerCounters, dict(
+    params=Layout.of(LearnerParams,
+                     slots("learning_rate batch_size samples_per_tick in_kernel")),
+    **slots("count head pending next_row n_updates loss")), args=("scal",))
+"""The learner's ``scal`` buffer."""
+unpack_counters = COUNTERS_LAYOUT.unpacker("unpack_counters", __name__)
 
 
 def make_counters() -> np.ndarray:
-    """A zeroed ``scal`` buffer, sized by ``unpack_counters``."""
-    return np.zeros(int(unpack_counters(np.zeros(LAYOUT_PROBE))[1]))
+    """A zeroed ``scal`` buffer (``COUNTERS_LAYOUT``)."""
+    return np.zeros(COUNTERS_LAYOUT.size())
 
 
 class LearnerArrays(NamedTuple):
@@ -94,9 +96,8 @@ class LearnerArrays(NamedTuple):
     ``grad_b``: its gradient so far (float32, shaped like the weights); ``acts`` (layers,
     max width) float64 activations of one sample; ``grad_out`` (2, max width) float64;
     ``target`` (6,) float32 scratch (this tick's normalized target); ``scal`` float64
-    [count, head, samples in the pending step (0: none), next row, SGD steps taken, loss
-    sum, learning rate, batch size, samples per tick, learner in the kernel (1) or in
-    Python (0)], named by ``unpack_counters``; ``rng`` (1,) uint64 splitmix64 state.
+    configuration and counters (``LearnerCounters``, ``COUNTERS_LAYOUT``); ``rng`` (1,)
+    uint64 splitmix64 state.
     """
 
     inputs: np.ndarray
@@ -120,8 +121,8 @@ def make_learner(capacity: int, batch_size: int, input_dim: int, weights: tuple,
     widest = max(w.shape[0] for w in weights)
     scal = make_counters()
     c = unpack_counters(scal)[0]
-    c.learning_rate[0], c.batch_size[0] = learning_rate, batch_size
-    c.samples_per_tick[0], c.in_kernel[0] = samples_per_tick, float(in_kernel)
+    c.params.learning_rate[0], c.params.batch_size[0] = learning_rate, batch_size
+    c.params.samples_per_tick[0], c.params.in_kernel[0] = samples_per_tick, float(in_kernel)
     f32 = np.float32
     return LearnerArrays(
         np.zeros((capacity, input_dim), f32), np.zeros((capacity, 6), f32),
@@ -162,7 +163,7 @@ def start_step(x, target, mask, lrn) -> None:
     """Begin an SGD step: row 0 = the current sample, then replayed rows; zero the gradient."""
     c = unpack_counters(lrn.scal)[0]
     count = int(c.count[0])
-    n = 1 + (int(c.batch_size[0]) - 1 if count > 0 else 0)
+    n = 1 + (int(c.params.batch_size[0]) - 1 if count > 0 else 0)
     lrn.batch_x[0, :] = x
     lrn.batch_y[0, :] = target
     lrn.batch_m[0, :] = mask
@@ -232,7 +233,7 @@ def accumulate_sample(r, weights, biases, lrn) -> None:
 def _apply(weights, biases, lrn) -> int:
     """W -= lr * grad for every layer; DIVERGED when the loss or a weight is not finite."""
     c = unpack_counters(lrn.scal)[0]
-    lr = np.float32(c.learning_rate[0])
+    lr = np.float32(c.params.learning_rate[0])
     finite = math.isfinite(c.loss[0])
     for k in range(len(weights)):
         w, b, gw, gb = weights[k], biases[k], lrn.grad_w[k], lrn.grad_b[k]
@@ -259,7 +260,7 @@ def continue_step(weights, biases, lrn) -> int:
     if n == 0:
         return 0
     r0 = int(c.next_row[0])
-    r1 = min(n, r0 + int(c.samples_per_tick[0]))
+    r1 = min(n, r0 + int(c.params.samples_per_tick[0]))
     for r in range(r0, r1):
         accumulate_sample(r, weights, biases, lrn)
     c.next_row[0] = r1
@@ -274,11 +275,11 @@ def learner_tick(flags, wrench_slow, mask, m32, m, weights, biases, lrn) -> int:
     this tick diverged. A no-op returning ``flags`` unchanged when the learner runs in Python.
     """
     c = unpack_counters(lrn.scal)[0]
-    if c.in_kernel[0] == 0.0:
+    if c.params.in_kernel[0] == 0.0:
         return flags
     if flags & (STORE | TRAIN):
-        out_scale = m.out_scale
-        n_rows, n_feat = int(m.history_length[0]), int(m.n_features[0])
+        out_scale = m.params.out_scale
+        n_rows, n_feat = int(m.params.history_length[0]), int(m.params.n_features[0])
         hist = m32.hist
         start = ((int(m.head[0]) + n_rows - 1) % n_rows + 1) * n_feat
         x = hist[start:start + n_rows * n_feat]

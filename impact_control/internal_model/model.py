@@ -125,13 +125,14 @@ class InternalModel:
         self._windows = [self._hist[h + 1 : h + 1 + L].reshape(-1) for h in range(L)]
         width = max(cfg.hidden_sizes)
         self.buffer = np.zeros(kernels.model_size(width))
-        kernels.unpack_model(self.buffer)[0].max_hidden[0] = width  # sizes ``acts``: first
+        self.buffer[kernels.MODEL_LAYOUT.offset("params__max_hidden")] = width  # sizes acts
         self.state = m = kernels.unpack_model(self.buffer)[0]
-        m.open_n[0], m.release_n[0] = cfg.surprise_open_n, cfg.surprise_release_n
-        m.slow_rate_max[0], m.replay_period[0] = cfg.slow_rate_max, cfg.replay_period
-        m.update_every[0], m.learning_enabled[0] = cfg.update_every, 1.0
-        m.history_length[0], m.n_features[0] = L, F
-        m.out_scale[:] = OUTPUT_SCALE
+        p = m.params
+        p.open_n[0], p.release_n[0] = cfg.surprise_open_n, cfg.surprise_release_n
+        p.slow_rate_max[0], p.replay_period[0] = cfg.slow_rate_max, cfg.replay_period
+        p.update_every[0], m.learning_enabled[0] = cfg.update_every, 1.0
+        p.history_length[0], p.n_features[0] = L, F
+        p.out_scale[:] = OUTPUT_SCALE
         self.wrench_pred_world = m.pred
 
     # ----------------------------------------------------------------- state management

@@ -107,13 +107,13 @@ def test_option_flags_read_the_slots_their_layout_defines() -> None:
     """The tick reads the impedance options' flags without building their views (a view
     costs its reference count on every tick): the slots must be the layout's."""
     from impact_control.impedance_options import (
-        extra_size,
+        IMPEDANCE_EXTRA_LAYOUT,
         null_clamp_on,
         options_on,
         unpack_impedance_extra,
     )
 
-    ext = np.zeros(extra_size(7))
+    ext = np.zeros(IMPEDANCE_EXTRA_LAYOUT.size(n=7))
     x, length = unpack_impedance_extra(ext, 7)
     assert length == ext.shape[0]
     x.on[0] = 1.0

@@ -127,14 +127,15 @@ def test_tcp_frame_clips_on_tcp_axes_and_reports_the_world_wrench() -> None:
 
 def test_the_options_layout_and_flag_slot_agree() -> None:
     from impact_control.slow_filter_options import (
-        EXTRA_SIZE,
+        SLOW_FILTER_EXTRA_LAYOUT,
         options_on,
         unpack_slow_filter_extra,
     )
 
-    ext = np.zeros(EXTRA_SIZE)
+    size = SLOW_FILTER_EXTRA_LAYOUT.size()
+    ext = np.zeros(size)
     x = unpack_slow_filter_extra(ext)
-    assert x.wrench_in.base is not None and sum(v.shape[0] for v in x) == EXTRA_SIZE
+    assert x.wrench_in.base is not None and sum(v.shape[0] for v in x) == size
     x.on[0] = 1.0
     assert options_on(ext)
     assert not options_on(SlowWrenchFilter(SlowWrenchConfig(), DT).state.extra)

@@ -156,7 +156,7 @@ def _pushed_at_rest(reading: str) -> tuple[np.ndarray, np.ndarray, float]:
     unexplained = _jacobian_com(sim, hand).T @ FORCE_N
     if reading == "commanded":
         unexplained = unexplained + sim.data.qfrc_damper[sim.arm_dof] + sim.frictionloss_torque()
-    expected = -env.controller.wrench_maps[0] @ unexplained
+    expected = -env.controller.estimator_map @ unexplained
     return info["wrench_ext_world"], expected, float(np.abs(sim.data.qvel[sim.arm_dof]).max())
 
 

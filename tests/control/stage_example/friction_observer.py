@@ -19,7 +19,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from impact_control.kernel_layout import Packed, _next, layout_size
+from impact_control.kernel_layout import Packed
+from impact_control.stage_layout import Layout
 from impact_control.validation import check_positive
 
 
@@ -57,18 +58,18 @@ class FrictionObserverState(NamedTuple):
     tau_friction: np.ndarray
 
 
-@njit(cache=True, inline="always")
-def unpack_friction_observer(buf, sc):
-    """(``FrictionObserverState`` as named views of ``buf``, the layout's length)."""
-    tau_friction, o = _next(buf, 0, 7)
-    return FrictionObserverState(sc, tau_friction), o
+FRICTION_OBSERVER_LAYOUT = Layout.of(FrictionObserverState, dict(tau_friction=7),
+                                     args=("buf", "params"))
+"""The stage's buffer (``params``, its scalars, pass through)."""
+unpack_friction_observer = FRICTION_OBSERVER_LAYOUT.unpacker("unpack_friction_observer",
+                                                             __name__)
 
 
 def make_friction_observer_state(config: FrictionObserverConfig, dt_s: float) -> Packed:
     """``config`` at control period ``dt_s`` [s], packed."""
     sc = FrictionObserverScalars(config.viscous_nm_s_per_rad,
                                  dt_s / (config.time_constant_s + dt_s))
-    return Packed(sc, np.zeros(layout_size(unpack_friction_observer, sc)))
+    return Packed(sc, np.zeros(FRICTION_OBSERVER_LAYOUT.size()))
 
 
 @njit(cache=True, inline="always")
