@@ -16,7 +16,7 @@ from impact_envs.cli import add_robot_set
 PROG = "impact-eval"
 
 QUICK_DEFAULTS = {
-    "env": "IMPACT/Hammer-v0",
+    "env": "IMPACT/Hammer-v1",
     "grid": "0.2,2.5,5,7.5,10",
     "episodes": 4,
     "out": Path("results/quickstart"),
@@ -68,7 +68,7 @@ def sweep_parser() -> argparse.ArgumentParser:
         "4 episodes, the shipped DP checkpoints (scripted methods if none ship), "
         "out results/quickstart; explicit options override",
     )
-    p.add_argument("--env", help="env id, e.g. IMPACT/Hammer-v0")
+    p.add_argument("--env", help="env id, e.g. IMPACT/Hammer-v1")
     p.add_argument(
         "--method",
         help="comma list of: " + ", ".join(_method_choices()),
