@@ -20,3 +20,16 @@ def test_a_table_recorded_on_the_current_version_is_skipped() -> None:
     assert not is_current({**old, "env_version": 0})
     assert is_current({"sweep_args": ["--env", "IMPACT/Hammer-v1"], "env_version": 1})
     assert is_current({"sweep_args": ["--env", "ImpactTest/Fake-v0"]})
+
+
+def test_version_flips_pairs_episodes_and_counts_outcome_changes() -> None:
+    from impact_eval.experiments.version_flips import table_flips
+
+    head = "method,env_id,param_value,episode,success,success_once\n"
+    before = head + ("a,IMPACT/Hammer-v0,1,0,True,True\na,IMPACT/Hammer-v0,1,1,False,True\n"
+                     "b,IMPACT/Hammer-v0,1,0,True,True\n")
+    after = head + ("a,IMPACT/Hammer-v1,1,0,True,True\na,IMPACT/Hammer-v1,1,1,True,True\n"
+                    "b,IMPACT/Hammer-v1,2,0,True,True\n")
+    r = table_flips(before, after)
+    assert (r["rows"], r["missing"], r["flips"]) == (3, 2, 1)
+    assert r["methods"] == {"a": (1, 2), "b": (0, 0)}
