@@ -32,4 +32,4 @@ def test_version_flips_pairs_episodes_and_counts_outcome_changes() -> None:
                     "b,IMPACT/Hammer-v1,2,0,True,True\n")
     r = table_flips(before, after)
     assert (r["rows"], r["missing"], r["flips"]) == (3, 2, 1)
-    assert r["methods"] == {"a": (1, 2), "b": (0, 0)}
+    assert r["methods"] == {"a": (1, 2)}  # b has no episode on both sides
