@@ -17,7 +17,6 @@ the venv of tests/learn/lerobot_venv.sh).
 
 from __future__ import annotations
 
-import argparse
 import json
 import shutil
 import subprocess
@@ -25,6 +24,7 @@ import sys
 import time
 from pathlib import Path
 
+from impact_control.cli import OneLineParser
 from impact_envs.versions import current_version, parse, retired
 
 RESULTS = Path(__file__).resolve().parents[2] / "results"
@@ -73,7 +73,7 @@ def rerun(table: str, entry: dict, results: Path, workers: int, python: str) -> 
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = OneLineParser(description=__doc__.splitlines()[0])
     p.add_argument("tables", nargs="*", help="tables to rerun (default: all, manifest order)")
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--python", default=sys.executable, help="interpreter of the sweeps")

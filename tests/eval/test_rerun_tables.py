@@ -33,3 +33,14 @@ def test_version_flips_pairs_episodes_and_counts_outcome_changes() -> None:
     r = table_flips(before, after)
     assert (r["rows"], r["missing"], r["flips"]) == (3, 2, 1)
     assert r["methods"] == {"a": (1, 2)}  # b has no episode on both sides
+
+
+def test_an_unknown_table_is_one_line(capsys) -> None:
+    import pytest
+
+    from impact_eval.experiments.rerun_tables import main
+
+    with pytest.raises(SystemExit) as info:
+        main(["no_such_table"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert info.value.code == 2 and len(err) == 1 and "valid: " in err[0] and "main_job" in err[0]
