@@ -2,6 +2,7 @@
 table's ``-v0`` rows at an earlier commit, outcome by outcome (issue 41).
 
     python -m impact_eval.experiments.version_flips --before REV [--out results/rerun_v1.md]
+    python -m impact_eval.experiments.version_flips --before REV --cells   # cells that moved
 
 For every manifest table whose entry names the current env version, the committed
 ``episodes.csv`` at ``REV`` (the last commit before the rerun) and the current one are paired
@@ -40,29 +41,50 @@ def table_flips(before: str, after: str) -> dict:
     a, b = _rows(before), _rows(after)
     common = a.keys() & b.keys()
     flips = sum(any(a[k][o] != b[k][o] for o in OUTCOMES) for k in common)
-    won_a, won_b = Counter(), Counter()
+    won_a, won_b, cell_a, cell_b, cell_n = (Counter() for _ in range(5))
     for k in common:
         won_a[k[0]] += _won(a[k])
         won_b[k[0]] += _won(b[k])
+        cell_a[k[:2]] += _won(a[k])
+        cell_b[k[:2]] += _won(b[k])
+        cell_n[k[:2]] += 1
+    moved = {c: (cell_a[c], cell_b[c], cell_n[c]) for c in sorted(cell_n)
+             if cell_a[c] != cell_b[c]}
     return {"rows": len(b), "missing": len(a.keys() ^ b.keys()), "flips": flips,
-            "methods": {m: (won_a[m], won_b[m]) for m in sorted(won_a.keys() | won_b.keys())}}
+            "methods": {m: (won_a[m], won_b[m]) for m in sorted(won_a.keys() | won_b.keys())},
+            "cells": moved}
 
 
-def report(results: Path, rev: str) -> str:
-    """The markdown table of every table rerun on the current version."""
+def _current_tables(results: Path, rev: str):
+    """(table, pairing) for every manifest table rerun on the current version."""
     entries = json.loads((results / "manifest.json").read_text())["tables"]
-    lines = [f"Rows of each table rerun on -v1 against its -v0 rows at {rev} "
-             "(`python -m impact_eval.experiments.version_flips`).", "",
-             "| table | rows | missing | outcome flips | successes per method, v0 -> v1 |",
-             "|---|---|---|---|---|"]
-    total = Counter()
     for table, entry in entries.items():
         if not is_current(entry) or "env_version" not in entry:
             continue
         path = f"results/{table}/episodes.csv"
         before = subprocess.run(["git", "show", f"{rev}:{path}"], capture_output=True,
                                 text=True, check=True, cwd=results.parent).stdout
-        r = table_flips(before, (results / table / "episodes.csv").read_text())
+        yield table, table_flips(before, (results / table / "episodes.csv").read_text())
+
+
+def cells_report(results: Path, rev: str) -> str:
+    """Every (table, method, value) cell whose successes moved: the lines docs are checked
+    against."""
+    lines = [f"Cells whose successes moved from the -v0 rows at {rev} to the -v1 rerun:", ""]
+    for table, r in _current_tables(results, rev):
+        for (method, value), (x, y, n) in r["cells"].items():
+            lines.append(f"{table}: {method} @ {value}: {x}/{n} -> {y}/{n}")
+    return "\n".join(lines) + "\n"
+
+
+def report(results: Path, rev: str) -> str:
+    """The markdown table of every table rerun on the current version."""
+    lines = [f"Rows of each table rerun on -v1 against its -v0 rows at {rev} "
+             "(`python -m impact_eval.experiments.version_flips`).", "",
+             "| table | rows | missing | outcome flips | successes per method, v0 -> v1 |",
+             "|---|---|---|---|---|"]
+    total = Counter()
+    for table, r in _current_tables(results, rev):
         methods = ", ".join(f"{m} {x}->{y}" for m, (x, y) in r["methods"].items())
         lines.append(f"| {table} | {r['rows']} | {r['missing']} | {r['flips']} | {methods} |")
         total.update(rows=r["rows"], missing=r["missing"], flips=r["flips"])
@@ -75,8 +97,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--before", required=True, help="the commit holding the -v0 tables")
     p.add_argument("--results", type=Path, default=RESULTS)
     p.add_argument("--out", type=Path, help="also write the table here")
+    p.add_argument("--cells", action="store_true",
+                   help="list the cells whose successes moved instead")
     a = p.parse_args(argv)
-    text = report(a.results, a.before)
+    text = (cells_report if a.cells else report)(a.results, a.before)
     print(text, end="")
     if a.out:
         a.out.write_text(text)

@@ -33,6 +33,7 @@ def test_version_flips_pairs_episodes_and_counts_outcome_changes() -> None:
     r = table_flips(before, after)
     assert (r["rows"], r["missing"], r["flips"]) == (3, 2, 1)
     assert r["methods"] == {"a": (1, 2)}  # b has no episode on both sides
+    assert r["cells"] == {("a", "1"): (1, 2, 2)}  # the one cell whose successes moved
 
 
 def test_an_unknown_table_is_one_line(capsys) -> None:
