@@ -55,16 +55,27 @@ def table_flips(before: str, after: str) -> dict:
             "cells": moved}
 
 
+def _git_show(results: Path, rev: str, path: str) -> str:
+    return subprocess.run(["git", "show", f"{rev}:{path}"], capture_output=True, text=True,
+                          check=True, cwd=results.parent).stdout
+
+
+def _cpu(entry: dict) -> str:
+    cpu = entry.get("cpu") or {}
+    return f"{cpu.get('cpu_model', '?')} {cpu.get('simd', '?')}"
+
+
 def _current_tables(results: Path, rev: str):
-    """(table, pairing) for every manifest table rerun on the current version."""
+    """(table, pairing) for every manifest table rerun on the current version; the pairing
+    also names the CPU each side was recorded on (``cpu_before``, ``cpu_after``)."""
     entries = json.loads((results / "manifest.json").read_text())["tables"]
+    old = json.loads(_git_show(results, rev, "results/manifest.json"))["tables"]
     for table, entry in entries.items():
         if not is_current(entry) or "env_version" not in entry:
             continue
-        path = f"results/{table}/episodes.csv"
-        before = subprocess.run(["git", "show", f"{rev}:{path}"], capture_output=True,
-                                text=True, check=True, cwd=results.parent).stdout
-        yield table, table_flips(before, (results / table / "episodes.csv").read_text())
+        before = _git_show(results, rev, f"results/{table}/episodes.csv")
+        r = table_flips(before, (results / table / "episodes.csv").read_text())
+        yield table, {**r, "cpu_before": _cpu(old.get(table, {})), "cpu_after": _cpu(entry)}
 
 
 def cells_report(results: Path, rev: str) -> str:
@@ -81,14 +92,16 @@ def report(results: Path, rev: str) -> str:
     """The markdown table of every table rerun on the current version."""
     lines = [f"Rows of each table rerun on -v1 against its -v0 rows at {rev} "
              "(`python -m impact_eval.experiments.version_flips`).", "",
-             "| table | rows | missing | outcome flips | successes per method, v0 -> v1 |",
-             "|---|---|---|---|---|"]
+             "| table | rows | missing | outcome flips | successes per method, v0 -> v1 "
+             "| recorded on, v0 -> v1 |",
+             "|---|---|---|---|---|---|"]
     total = Counter()
     for table, r in _current_tables(results, rev):
         methods = ", ".join(f"{m} {x}->{y}" for m, (x, y) in r["methods"].items())
-        lines.append(f"| {table} | {r['rows']} | {r['missing']} | {r['flips']} | {methods} |")
+        lines.append(f"| {table} | {r['rows']} | {r['missing']} | {r['flips']} | {methods} "
+                     f"| {r['cpu_before']} -> {r['cpu_after']} |")
         total.update(rows=r["rows"], missing=r["missing"], flips=r["flips"])
-    lines.append(f"| all | {total['rows']} | {total['missing']} | {total['flips']} | |")
+    lines.append(f"| all | {total['rows']} | {total['missing']} | {total['flips']} | | |")
     return "\n".join(lines) + "\n"
 
 
