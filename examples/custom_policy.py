@@ -16,7 +16,7 @@ class CarefulExpert:
     Here: the scripted Hammer expert, with its TCP target moves capped at 1 cm per step."""
 
     def __init__(self) -> None:
-        self.expert, self.last = make_expert("IMPACT/Hammer-v0"), None
+        self.expert, self.last = make_expert("IMPACT/Hammer-v1"), None
 
     def reset(self, n_envs: int) -> None:
         self.expert.reset(n_envs)
@@ -37,7 +37,7 @@ if __name__ == "__main__":
     parser.add_argument("--episodes", type=int, default=10)
     args = parser.parse_args()
     for controller in ("impedance", "impact"):
-        table = impact_eval.evaluate(CarefulExpert(), "IMPACT/Hammer-v0", [0.5, 2.0, 5.0],
+        table = impact_eval.evaluate(CarefulExpert(), "IMPACT/Hammer-v1", [0.5, 2.0, 5.0],
                                      f"{args.out}/{controller}", episodes=args.episodes,
                                      controller=controller, name=f"careful_{controller}")
         print(controller, table.groupby("param_value")["success"].mean().to_dict())

@@ -23,7 +23,7 @@ import numpy as np
 from impact_control.policy import SeededPolicy
 from impact_learn.dataset import load_replay
 
-ENV_ID = "IMPACT/Hammer-v0"
+ENV_ID = "IMPACT/Hammer-v1"
 
 
 @dataclass(frozen=True)

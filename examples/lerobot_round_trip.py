@@ -11,7 +11,7 @@ Runs in a virtualenv that holds lerobot and this package (docs/lerobot.md, "Roun
    defaults are the recipe of the shipped ``hammer/lerobot_dp`` checkpoint (docs/lerobot.md);
 4. ``impact_eval.evaluate``: the LeRobot policy behind our policy protocol
    (``impact_lerobot.policy``),
-   on ``IMPACT/Hammer-v0`` over ``--masses`` under impedance, IMPACT and IMPACT's paper preset.
+   on ``IMPACT/Hammer-v1`` over ``--masses`` under impedance, IMPACT and IMPACT's paper preset.
 
 Each stage is skipped when its output exists, so an interrupted run continues.
 """
@@ -32,7 +32,7 @@ from impact_learn import lerobot_export
 from impact_learn.lerobot_compat import define_missing_torchvision_ops
 from impact_lerobot.policy import LeRobotPolicy, load_lerobot_policy
 
-ENV_ID = "IMPACT/Hammer-v0"
+ENV_ID = "IMPACT/Hammer-v1"
 REPO_ID = "impact/hammer"  # a name only: the dataset is read from its folder
 RUNS = (("impedance", "impedance", "default"), ("impact", "impact", "default"),
         ("impact_paper", "impact", "paper"))

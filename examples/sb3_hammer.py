@@ -1,4 +1,4 @@
-"""The paper's experiment with reinforcement learning: SB3 SAC trained on IMPACT/Hammer-v0 at
+"""The paper's experiment with reinforcement learning: SB3 SAC trained on IMPACT/Hammer-v1 at
 the nominal mass (dense reward, delta actions), then evaluated across masses under impedance
 and under IMPACT with impact-eval (examples/README.md gives the numbers).
 
@@ -26,7 +26,7 @@ if __name__ == "__main__":
     torch.set_num_threads(1)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    env = RLActions(gym.make("IMPACT/Hammer-v0", object_mass=0.2, reward_type="dense"),
+    env = RLActions(gym.make("IMPACT/Hammer-v1", object_mass=0.2, reward_type="dense"),
                     mode="delta")
     model = sb3.SAC("MultiInputPolicy", env, seed=0, device="cpu", verbose=0)
     t0 = time.perf_counter()
@@ -35,6 +35,6 @@ if __name__ == "__main__":
     model.save(out / "sac_hammer_delta.zip")
     zip_path = out / "sac_hammer_delta.zip"
     raise SystemExit(impact_eval([
-        "--env", "IMPACT/Hammer-v0", "--method", f"sb3_impedance:{zip_path},sb3:{zip_path}",
+        "--env", "IMPACT/Hammer-v1", "--method", f"sb3_impedance:{zip_path},sb3:{zip_path}",
         "--masses", "0.2,1,2,5", "--episodes", str(args.episodes), "--trust-sb3",
         "--out", str(out / "eval")]))

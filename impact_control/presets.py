@@ -10,7 +10,7 @@ each one alone is in docs/results.md.
 
     ControllerConfig()                     # the "default" preset
     preset_config("paper")                 # the paper-literal table
-    gym.make("IMPACT/Hammer-v0", controller_preset="paper")
+    gym.make("IMPACT/Hammer-v1", controller_preset="paper")
     preset_config("default", estimator="momentum")  # the momentum-observer estimator
 """
 

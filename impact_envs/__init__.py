@@ -1,7 +1,7 @@
 """IMPACT: Gymnasium environments and the internal-model predictive controller.
 
 Importing this package registers the environments, one per task (``tasks/registry.py``), e.g.
-``gym.make("IMPACT/Hammer-v0")``. On a machine without a display it first picks MuJoCo's
+``gym.make("IMPACT/Hammer-v1")``. On a machine without a display it first picks MuJoCo's
 headless GL backend when ``MUJOCO_GL`` is unset (``_gl.py``; before anything imports mujoco).
 The envs' option classes are importable from here: ``from impact_envs import
 ObservationOptions, RenderOptions, RobotOptions``.

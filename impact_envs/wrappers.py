@@ -44,7 +44,7 @@ class RLActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
     """``Box(-1, 1)`` actions for an IMPACT env (see the module docstring).
 
     Args:
-        env: An IMPACT env (``gym.make("IMPACT/Hammer-v0", ...)``), possibly wrapped.
+        env: An IMPACT env (``gym.make("IMPACT/Hammer-v1", ...)``), possibly wrapped.
         mode: ``"absolute"`` or ``"delta"``.
         max_step_m: Largest translation of the target per step in ``"delta"`` mode [m].
         max_turn_rad: Largest rotation about each world axis per step in ``"delta"`` [rad].
@@ -56,7 +56,7 @@ class RLActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
         task = getattr(getattr(env, "unwrapped", None), "task", None)
         if not hasattr(task, "workspace_low"):
             raise InvalidArgumentError(
-                f"RLActions wraps an IMPACT env (gym.make('IMPACT/Hammer-v0', ...)), got "
+                f"RLActions wraps an IMPACT env (gym.make('IMPACT/Hammer-v1', ...)), got "
                 f"{getattr(getattr(env, 'spec', None), 'id', None) or type(env).__name__}")
         for name, value in (("max_step_m", max_step_m), ("max_turn_rad", max_turn_rad)):
             _check_positive_finite(name, value)

@@ -187,7 +187,7 @@ def _check_args(args: argparse.Namespace) -> None:
 
 def main(argv: list[str] | None = None) -> None:
     parser = OneLineParser(prog="impact-bench", description=__doc__.splitlines()[0])
-    parser.add_argument("--env", default="IMPACT/Hammer-v0", choices=impact_envs.ENV_IDS)
+    parser.add_argument("--env", default="IMPACT/Hammer-v1", choices=impact_envs.ENV_IDS)
     parser.add_argument("--steps", type=int, default=300, help="policy steps (30 Hz) per run")
     parser.add_argument("--mass", type=float, default=2.5, help="object mass [kg]")
     parser.add_argument("--seed", type=int, default=0)

@@ -15,7 +15,7 @@ CHECKPOINTS_ENV_VAR = "IMPACT_CHECKPOINTS"
 
 
 def env_short_name(env_id: str) -> str:
-    """``"IMPACT/Hammer-v0"`` (or ``"mod:IMPACT/Hammer-v0"``) -> ``"hammer"``."""
+    """``"IMPACT/Hammer-v1"`` (or ``"mod:IMPACT/Hammer-v1"``) -> ``"hammer"``."""
     name = env_id.rsplit(":", 1)[-1].rsplit("/", 1)[-1]
     return re.sub(r"-v\d+$", "", name).lower()
 

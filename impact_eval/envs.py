@@ -12,6 +12,7 @@ import gymnasium as gym
 import numpy as np
 
 from impact_control.errors import ImpactError, InvalidArgumentError
+from impact_envs.versions import check_not_retired
 
 DEFAULT_PARAM_NAME = "object_mass"
 """Parameter swept when the env does not declare ``param_name``."""
@@ -46,6 +47,7 @@ def env_choices(bare_id: str) -> list[str]:
 def check_env_id(env_id: str) -> str:
     """Raise a one-line ``InvalidArgumentError`` unless ``env_id`` is registered; return bare id."""
     bare_id = import_env_module(env_id)
+    check_not_retired(bare_id)
     if bare_id not in gym.registry:
         choices = ", ".join(env_choices(bare_id)) or "(none registered)"
         raise InvalidArgumentError(f"unknown env id {env_id!r}; valid choices: {choices}")

@@ -7,6 +7,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from impact_envs.versions import version_of
 from impact_eval import runinfo
 from impact_eval.csvio import EpisodeLog
 from impact_eval.prepare import Plan
@@ -47,6 +48,7 @@ def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict
         },
         "env": {
             "id": plan.env.env_id,
+            "version": version_of(plan.env.env_id),
             "param_name": plan.env.param_name,
             "control_dt_s": plan.env.control_dt,
             "policy_dt_s": plan.env.policy_dt,

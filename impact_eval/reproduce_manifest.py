@@ -194,6 +194,8 @@ def record(results: Path, tables: Sequence[str]) -> dict:
         host = run.get("host") if isinstance(run.get("host"), dict) else {}
         manifest["tables"][table] = {
             "dir": table, "sweep_args": sweep_args, "command": run.get("command"),
+            "env_version": (run["env"].get("version") if isinstance(run.get("env"), dict)
+                            else None),
             "git": run.get("git"), "versions": run.get("versions"),
             "episodes_sha256": sha256(csv_path), "rows": len(read_rows(csv_path)),
             "cpu": {k: str(host.get(k) or "unknown") for k in ("cpu_model", "simd")},

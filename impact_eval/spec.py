@@ -64,7 +64,7 @@ class SweepSpec:
     controller / robot changes. Two runs with equal specs write the same rows."""
 
     env_id: str
-    """As given (``IMPACT/Hammer-v0``; ``module:ID`` imports the module that registers it)."""
+    """As given (``IMPACT/Hammer-v1``; ``module:ID`` imports the module that registers it)."""
     methods: tuple[str, ...]
     """Method names as given (shortcuts, compositions or ``sb3:<zip>``; ``methods.py``)."""
     values: tuple[float, ...]
@@ -92,7 +92,7 @@ class SweepSpec:
             object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
         if not isinstance(self.env_id, str) or not self.env_id:
             raise InvalidArgumentError(f"invalid env id {self.env_id!r}; valid: a registered "
-                                       "env id, e.g. IMPACT/Hammer-v0")
+                                       "env id, e.g. IMPACT/Hammer-v1")
         parse_method_list(",".join(self.methods))  # empty or repeated names
         _at_least("--episodes", self.episodes, 1)
         _at_least("--seed", self.seed, 0)

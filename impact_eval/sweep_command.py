@@ -16,7 +16,7 @@ from impact_envs.cli import add_robot_set
 PROG = "impact-eval"
 
 QUICK_DEFAULTS = {
-    "env": "IMPACT/Hammer-v0",
+    "env": "IMPACT/Hammer-v1",
     "grid": "0.2,2.5,5,7.5,10",
     "episodes": 4,
     "out": Path("results/quickstart"),
@@ -68,7 +68,7 @@ def sweep_parser() -> argparse.ArgumentParser:
         "4 episodes, the shipped DP checkpoints (scripted methods if none ship), "
         "out results/quickstart; explicit options override",
     )
-    p.add_argument("--env", help="env id, e.g. IMPACT/Hammer-v0")
+    p.add_argument("--env", help="env id, e.g. IMPACT/Hammer-v1")
     p.add_argument(
         "--method",
         help="comma list of: " + ", ".join(_method_choices()),
@@ -89,13 +89,15 @@ def sweep_parser() -> argparse.ArgumentParser:
         "0.1-0.3,0.3-0.5,0.5-1: each episode draws its value uniformly in its bin from its "
         "seed (episodes.csv: drawn_mass_kg; param_value is the bin's LO)",
     )
-    _add_run_options(p)
+    _add_spec_options(p)
+    _add_output_options(p)
     _add_executor_options(p)
     return p
 
 
-def _add_run_options(p: argparse.ArgumentParser) -> None:
-    """Sweep options beyond what to run: parameter, counts, output, parallelism, seed, ablation."""
+def _add_spec_options(p: argparse.ArgumentParser) -> None:
+    """What defines the rows beyond env, methods and grid: parameter, episodes, seed and the
+    controller and robot changes (``SweepSpec``)."""
     p.add_argument(
         "--param",
         default=None,
@@ -103,6 +105,27 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--episodes", type=int, default=None,
                    help="episodes per (method, value) (default 20)")
+    p.add_argument("--seed", type=int, default=0, help="base seed of the paired episode seeds")
+    p.add_argument(
+        "--controller-set",
+        action="append",
+        default=[],
+        metavar="SECTION.FIELD=VALUE",
+        help="change one field of the controller config on top of each method's preset "
+        "(its @PRESET, docs/eval.md 'Methods'; repeatable; ablations), e.g. "
+        "internal_model.slow_rate_max=1.5; recorded in run.json",
+    )
+    add_robot_set(p, "run.json, checked on --resume; for every method")
+    p.add_argument(
+        "--beyond-hardware-limits",
+        action="store_true",
+        help="allow --controller-set limits above the FR3's (87/12 Nm, 1000 Nm/s); recorded "
+        "in run.json",
+    )
+
+
+def _add_output_options(p: argparse.ArgumentParser) -> None:
+    """Where and how the rows are written, none of which changes a row (``RunOptions``)."""
     p.add_argument("--out", type=Path, help="output directory")
     p.add_argument(
         "--workers",
@@ -116,17 +139,6 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         default=20,
         help="envs each worker steps in lockstep with one batched policy call (default 20)",
     )
-    p.add_argument("--seed", type=int, default=0, help="base seed of the paired episode seeds")
-    p.add_argument(
-        "--controller-set",
-        action="append",
-        default=[],
-        metavar="SECTION.FIELD=VALUE",
-        help="change one field of the controller config on top of each method's preset "
-        "(its @PRESET, docs/eval.md 'Methods'; repeatable; ablations), e.g. "
-        "internal_model.slow_rate_max=1.5; recorded in run.json",
-    )
-    add_robot_set(p, "run.json, checked on --resume; for every method")
     p.add_argument(
         "--resume",
         action="store_true",
@@ -153,12 +165,6 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
         help="write the first K episodes of every cell as MP4 to OUT/videos (imageio-ffmpeg; "
         "rendering is checked before anything is written; no display: MUJOCO_GL=egl is "
         "picked when unset)",
-    )
-    p.add_argument(
-        "--beyond-hardware-limits",
-        action="store_true",
-        help="allow --controller-set limits above the FR3's (87/12 Nm, 1000 Nm/s); recorded "
-        "in run.json",
     )
     p.add_argument(
         "--trust-sb3",

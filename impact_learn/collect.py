@@ -2,10 +2,10 @@
 
 Usage::
 
-    impact-collect --env IMPACT/Hammer-v0 --out data/hammer_vanilla.zarr --episodes 200 --mass 0.2
-    impact-collect --env IMPACT/Hammer-v0 --out data/hammer_aug.zarr --episodes 200 \\
+    impact-collect --env IMPACT/Hammer-v1 --out data/hammer_vanilla.zarr --episodes 200 --mass 0.2
+    impact-collect --env IMPACT/Hammer-v1 --out data/hammer_aug.zarr --episodes 200 \\
         --mass-range 0.1:8
-    impact-collect --env IMPACT/Dumbbell-v0 --out data/db_aug.zarr --episodes 200 \\
+    impact-collect --env IMPACT/Dumbbell-v1 --out data/db_aug.zarr --episodes 200 \\
         --mass-list 2.5,5 --resume
 
 Attempt ``k`` uses env seed ``SeedSequence([seed, k])`` and a parameter drawn from
@@ -178,7 +178,7 @@ def _store_batch(writer: ReplayWriter, target: int, batch: AttemptBatch,
 def build_parser() -> argparse.ArgumentParser:
     """Command-line interface of ``impact-collect``."""
     parser = OneLineParser(prog="impact-collect", description=__doc__.splitlines()[0])
-    parser.add_argument("--env", required=True, help="env id, e.g. IMPACT/Hammer-v0")
+    parser.add_argument("--env", required=True, help="env id, e.g. IMPACT/Hammer-v1")
     parser.add_argument("--out", required=True, help="output store (*.zarr)")
     parser.add_argument("--episodes", type=int, default=200, help="successful demos to keep")
     group = parser.add_mutually_exclusive_group()

@@ -9,6 +9,7 @@ from impact_control.controller import CONTROLLERS
 from impact_control.errors import InvalidArgumentError, check_choice
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.parallel import check_executor
+from impact_envs.versions import check_not_retired
 
 COMPENSATIONS = ("none", "closed_loop", "privileged")
 """Expert compensation modes (``impact_envs.policies.scripted.COMPENSATIONS``)."""
@@ -22,7 +23,7 @@ class CollectConfig:
     default parameter is used.
 
     Attributes:
-        env_id: Gymnasium id, e.g. ``IMPACT/Hammer-v0``.
+        env_id: Gymnasium id, e.g. ``IMPACT/Hammer-v1``.
         out: Output zarr store path.
         episodes: Number of successful demonstrations to keep.
         param: Fixed value of the env's randomized parameter (object mass [kg]).
@@ -66,6 +67,7 @@ class CollectConfig:
     observation: ObservationOptions = ObservationOptions()
 
     def __post_init__(self) -> None:
+        check_not_retired(self.env_id)
         check_choice("controller", self.controller, CONTROLLERS)
         check_choice("compensation", self.compensation, COMPENSATIONS)
         check_executor(self.executor, self.ray_address)

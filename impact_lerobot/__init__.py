@@ -8,7 +8,7 @@ type ``impact`` (it imports LeRobot, so only LeRobot's loader and code that has 
 it)::
 
     lerobot-eval --env.discover_packages_path=impact_lerobot --env.type=impact \\
-        --env.task=Hammer-v0 --policy.path=DIR --eval.n_episodes=10 --eval.batch_size=1
+        --env.task=Hammer-v1 --policy.path=DIR --eval.n_episodes=10 --eval.batch_size=1
 """
 
 from __future__ import annotations

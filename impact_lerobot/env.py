@@ -1,4 +1,4 @@
-"""The wrapped envs LeRobot makes: ``gym.make("gym_impact/Hammer-v0", settings=...)``.
+"""The wrapped envs LeRobot makes: ``gym.make("gym_impact/Hammer-v1", settings=...)``.
 
 ``register_envs`` registers one id per task under ``GYM_NAMESPACE`` (LeRobot 0.4.4's
 ``make_env`` calls ``gym.make(f"gym_{type}/{task}")``), whose entry point ``make_lerobot_env``

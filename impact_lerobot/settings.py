@@ -18,12 +18,13 @@ from impact_control.presets import PRESETS
 from impact_envs import ENV_IDS, ObservationOptions
 from impact_envs.tasks.base import Task, TaskParam
 from impact_envs.tasks.registry import task_class
+from impact_envs.versions import check_not_retired
 
 GYM_NAMESPACE = "gym_impact"
 """LeRobot 0.4.4 makes ``gym_<type>/<task>``: the wrapped envs are registered under it."""
 ENV_NAMESPACE = "IMPACT"
 TASKS: tuple[str, ...] = tuple(env_id.split("/", 1)[1] for env_id in ENV_IDS)
-"""The plugin's tasks: one per built-in env (``Hammer-v0`` is ``IMPACT/Hammer-v0``)."""
+"""The plugin's tasks: one per built-in env (``Hammer-v1`` is ``IMPACT/Hammer-v1``)."""
 OBS_MODES: tuple[str, ...] = ("state", "rgb", "state+rgb")
 """The observation modes ``impact-export-lerobot`` exports (``rgbd``'s depth images are not
 exported, docs/lerobot.md), so a policy trained on an export sees the same features here."""
@@ -45,7 +46,7 @@ class PluginSettings:
     """One ``impact`` env for LeRobot.
 
     Attributes:
-        task: One of ``TASKS`` (``Hammer-v0`` runs ``IMPACT/Hammer-v0``).
+        task: One of ``TASKS`` (``Hammer-v1`` runs ``IMPACT/Hammer-v1``).
         controller: ``impact`` (IMPACT) or ``impedance`` (the plain impedance baseline).
         controller_preset: One of ``impact_control.presets.PRESETS``.
         object_mass: The mass [kg] of every episode (the task's ``mass_param``); None: the
@@ -58,7 +59,7 @@ class PluginSettings:
         episode_length: Policy steps per episode, at most the env's; None: the env's.
     """
 
-    task: str = "Hammer-v0"
+    task: str = "Hammer-v1"
     controller: str = "impact"
     controller_preset: str = "default"
     object_mass: float | None = None
@@ -70,6 +71,7 @@ class PluginSettings:
     episode_length: int | None = None
 
     def __post_init__(self) -> None:
+        check_not_retired(f"gym_impact/{self.task}")
         check_choice("task", self.task, TASKS)
         check_choice("controller", self.controller, CONTROLLERS)
         check_choice("controller_preset", self.controller_preset, PRESETS)
@@ -110,12 +112,12 @@ class PluginSettings:
 
     @property
     def env_id(self) -> str:
-        """Our env's id (``IMPACT/Hammer-v0``)."""
+        """Our env's id (``IMPACT/Hammer-v1``)."""
         return f"{ENV_NAMESPACE}/{self.task}"
 
     @property
     def gym_id(self) -> str:
-        """The wrapped env's id, as LeRobot 0.4.4 makes it (``gym_impact/Hammer-v0``)."""
+        """The wrapped env's id, as LeRobot 0.4.4 makes it (``gym_impact/Hammer-v1``)."""
         return f"{GYM_NAMESPACE}/{self.task}"
 
     @property

@@ -13,9 +13,8 @@ without copying.
 from __future__ import annotations
 
 import copy
-import json
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +22,7 @@ import numpy as np
 
 from impact_control.errors import CheckpointError, InvalidArgumentError
 from impact_control.internal_model import kernels
+from impact_control.internal_model.checkpoint import read_config, read_weights, write_checkpoint
 from impact_control.internal_model.config import InternalModelConfig
 from impact_control.internal_model.gate import SurpriseGate
 from impact_control.internal_model.learner import (
@@ -35,7 +35,6 @@ from impact_control.internal_model.net import (
     FEATURE_NAMES,
     FEATURE_OFFSET,
     FEATURE_SCALE,
-    FORMAT_VERSION,
     MLP,
     OUTPUT_SCALE,
     build_network,
@@ -347,14 +346,9 @@ class InternalModel:
         self.reset_history()
 
     def save(self, path: str | Path) -> Path:
-        """Write weights to ``path`` (.safetensors) and the config to the same stem + .json."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        _safetensors().save_file(dict(self.net.state_dict()), str(path))
-        meta = {"format_version": FORMAT_VERSION, "feature_names": list(FEATURE_NAMES)}
-        meta["config"] = asdict(self.config)
-        path.with_suffix(".json").write_text(json.dumps(meta, indent=2))
-        return path
+        """Write weights to ``path`` (.safetensors) and the config to the same stem + .json
+        (``checkpoint.write_checkpoint``)."""
+        return write_checkpoint(path, self.net.state_dict(), self.config)
 
     def load(self, path: str | Path) -> None:
         """Load weights saved by ``save``; the network shape must match this model's config.
@@ -362,45 +356,16 @@ class InternalModel:
         Raises:
             CheckpointError: Missing files, other feature layout or network shape.
         """
-        path = Path(path)
-        meta_path = path.with_suffix(".json")
-        if not path.is_file() or not meta_path.is_file():
-            raise CheckpointError(f"missing internal model files {path} / {meta_path}")
-        meta = json.loads(meta_path.read_text())
-        saved = meta.get("config", {})
-        same_shape = saved.get("history_length") == self.config.history_length and tuple(
-            saved.get("hidden_sizes", ())
-        ) == tuple(self.config.hidden_sizes)
-        if meta.get("feature_names") != list(FEATURE_NAMES) or not same_shape:
-            raise CheckpointError(f"internal model checkpoint {path} does not match the config")
+        weights = read_weights(path, self.config)
         try:
-            self.net.load_state_dict(_safetensors().load_file(str(path)))
-        except (RuntimeError, OSError, ValueError) as exc:
+            self.net.load_state_dict(weights)
+        except (RuntimeError, ValueError) as exc:
             raise CheckpointError(f"cannot load internal model weights {path}: {exc}") from exc
         self.refresh_fast_path()
 
     @classmethod
     def from_file(cls, path: str | Path) -> InternalModel:
         """Build a model with the saved config and load its weights."""
-        meta_path = Path(path).with_suffix(".json")
-        if not meta_path.is_file():
-            raise CheckpointError(f"missing internal model config {meta_path}")
-        saved = json.loads(meta_path.read_text()).get("config", {})
-        try:
-            config = InternalModelConfig(**saved)
-        except TypeError as exc:
-            raise CheckpointError(f"invalid internal model config in {meta_path}: {exc}") from exc
-        model = cls(config)
+        model = cls(read_config(path))
         model.load(path)
         return model
-
-
-def _safetensors() -> Any:
-    """``safetensors.numpy``, which the benchmark installs ([bench]) and a robot PC's light
-    install does not: saving or loading a model there is a one-line ``CheckpointError``."""
-    try:
-        import safetensors.numpy
-    except ImportError:
-        raise CheckpointError("saving or loading an internal model needs safetensors "
-                              "(pip install safetensors, or the [bench] extra)") from None
-    return safetensors.numpy

@@ -1,4 +1,4 @@
-"""``IMPACT/Disturbance-v0``."""
+"""``IMPACT/Disturbance-v1``."""
 
 from __future__ import annotations
 
@@ -70,31 +70,12 @@ class DisturbanceEnv(ImpactEnv):
     0.3 kg; ranges 0–40 N, 0.05–5 kg, 0–5 kg), ``object_mass`` [kg] (shortcut),
     ``controller_preset``, ``robot``, ``persist_internal_model``, ``terminate_on_success``,
     ``reward_type``, ``render_mode`` ("rgb_array"), ``render``, ``observation`` (as for
-    ``IMPACT/Hammer-v0``).
+    ``IMPACT/Hammer-v1``).
 
     ## Version history
-    - v0: initial release (unreleased; tables in docs/ are regenerated on change). 2026-11-22:
-      the disturbance acts only while the trough is held. 2026-11-24: the ``default``
-      controller preset replaces the paper-literal one (``controller_preset="paper"``).
-      2026-11-25: bad input only: an action must have shape ``(10,)`` (others were
-      flattened) and a parameter value must be a real number (bools and strings were coerced).
-      2026-11-25: constructor arguments grouped (no number changes): ``sensor_noise``,
-      ``grasp_force_n`` and ``model_mass_error`` are now fields of
-      ``robot=RobotOptions(...)``, ``width``, ``height`` and ``camera`` of
-      ``render=RenderOptions(...)``, and ``controller_preset`` also takes a
-      ``ControllerConfig`` (replacing ``controller_config``).
-      2026-11-25: ``reward_type="dense"`` added (sparse stays the default).
-      2026-11-26: pixel observations (``observation=ObservationOptions(...)``) and a
-      ``"wrist"`` camera added; the default ``"state"`` mode is unchanged bit for bit.
-      2026-11-26: ``estimator`` removed from the constructor (no number changes): the
-      wrench estimator is a field of the controller's config, chosen with
-      ``controller_preset=preset_config("default", estimator="momentum")``.
-      2026-11-27: ``controller_preset`` also takes ``"authors_sim"`` and ``"authors_real"``
-      (the paper authors' released controller) and ``RobotOptions`` gains ``torque_reading``
-      (default ``"link_side"``, unchanged). The ``default`` preset gains the saturated-lift
-      release (docs/controller.md): with a load the wrist cannot hold, the learned
-      feedforward is let go after 0.5 s at a torque bound without the load rising; episodes
-      that never stall at a bound are unchanged bit for bit, ``paper`` is unchanged.
+    In ``impact_envs/versions.py`` (``VERSIONS["Disturbance"]``, the table in docs/envs.md), one
+    history for every env. v1: the behaviour of the last v0, pinned under a new name
+    (2026-11-28). v0: retired (it changed behaviour under one name; a one-line error names v1).
     """
 
     @classmethod

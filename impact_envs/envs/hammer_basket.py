@@ -1,4 +1,4 @@
-"""``IMPACT/HammerBasket-v0``."""
+"""``IMPACT/HammerBasket-v1``."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ class HammerBasketEnv(ImpactEnv):
     centre of mass lies 4.4 cm from its body origin, toward the head; a free 2.2 kg basket with
     a 0.4 × 0.4 m floor; friction 4.0 / 1.0 / 0.001 with condim 6 on the hammer, also against
     the fingers; their simulated fingers' 200 N grasp force (``robot.hand="authors_sim"``);
-    their home posture; 60 s episodes. Unlike ``IMPACT/Hammer-v0`` success is judged at the
+    their home posture; 60 s episodes. Unlike ``IMPACT/Hammer-v1`` success is judged at the
     end of the episode only, by their test. The hammer mass is the varying parameter (their
     bins 0.1–10 kg; ``impact-eval --mass-bins``); inertia scales with mass (uniform density,
     fixed COM). A policy acts at 30 Hz with absolute TCP pose targets; inside, a 1 kHz torque
@@ -35,7 +35,7 @@ class HammerBasketEnv(ImpactEnv):
     sensors), then ``object_pos`` (3) [m] hammer centre of mass, ``object_rot6d`` (6) hammer
     orientation (x axis toward the head), ``object_origin_pos`` (3) [m] the hammer's body
     origin (their grasp point and the point their success test reads), ``goal_pos`` (3) [m]
-    basket centre. Pixel modes as for ``IMPACT/Hammer-v0``; the scene adds their two policy
+    basket centre. Pixel modes as for ``IMPACT/Hammer-v1``; the scene adds their two policy
     cameras, ``"basket_front"`` and ``"basket_side"``.
 
     ## Rewards
@@ -61,12 +61,14 @@ class HammerBasketEnv(ImpactEnv):
     ``SimulationError`` if the physics diverges.
 
     ## Arguments
-    As for ``IMPACT/Hammer-v0``; ``object_mass`` [kg] default 0.1 (their nominal), range
+    As for ``IMPACT/Hammer-v1``; ``object_mass`` [kg] default 0.1 (their nominal), range
     0.05–12; ``robot=RobotOptions(...)``'s ``grasp_force_n`` defaults to 200 N and may not
     exceed it (their fingers; ``hand="franka_hand"`` gives the Franka Hand's 70 / 140 N).
 
     ## Version history
-    - v0: initial release (2026-11-27).
+    In ``impact_envs/versions.py`` (``VERSIONS["HammerBasket"]``, the table in docs/envs.md), one
+    history for every env. v1: the behaviour of the last v0, pinned under a new name
+    (2026-11-28). v0: retired (it changed behaviour under one name; a one-line error names v1).
     """
 
     @classmethod

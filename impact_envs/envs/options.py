@@ -57,7 +57,7 @@ class RobotOptions:
             the Franka Hand; 200 N for ``"authors_sim"``).
         hand: Which hand's grasp-force range applies, one of ``hand.HANDS``
             (``"franka_hand"``, ``"authors_sim"``). None (default): the task's
-            (``Task.hand``: the Franka Hand, except ``IMPACT/HammerBasket-v0``).
+            (``Task.hand``: the Franka Hand, except ``IMPACT/HammerBasket-v1``).
         model_mass_error: Relative error of the controller's link masses (0: exact model).
         torque_reading: What the controller reads as the measured joint torque, one of
             ``TORQUE_READINGS`` (docs/sensing.md, "Torque reading"):

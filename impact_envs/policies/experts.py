@@ -44,7 +44,7 @@ def _factory(task_name: str) -> ExpertFactory | None:
 
 def make_expert(task: str, compensation: str = "none") -> Policy:
     """The scripted expert of a task, by task name (``"hammer"``) or env id
-    (``"IMPACT/Hammer-v0"``); ``compensation``: how it meets a load's sag.
+    (``"IMPACT/Hammer-v1"``); ``compensation``: how it meets a load's sag.
 
     Raises:
         InvalidArgumentError: Unknown task or env id, no expert for it, or a compensation

@@ -268,7 +268,7 @@ class PickPlaceExpert:
 
 
 def hammer_expert(compensation: str = "none") -> PickPlaceExpert:
-    """The pick-and-place expert of ``IMPACT/Hammer-v0`` (grasp at the handle's COM)."""
+    """The pick-and-place expert of ``IMPACT/Hammer-v1`` (grasp at the handle's COM)."""
     from impact_envs.tasks.hammer import HANDLE_HALF_HEIGHT_M, PAD_CLEARANCE_M
 
     spec = PickPlaceSpec(
@@ -283,7 +283,7 @@ def hammer_expert(compensation: str = "none") -> PickPlaceExpert:
 
 
 def dumbbell_expert(compensation: str = "none") -> PickPlaceExpert:
-    """The pick-and-place expert of ``IMPACT/Dumbbell-v0`` (grasp at the bar centre)."""
+    """The pick-and-place expert of ``IMPACT/Dumbbell-v1`` (grasp at the bar centre)."""
     from impact_envs.tasks.dumbbell import PAD_TOP_M, PLATE_APOTHEM_M
 
     spec = PickPlaceSpec(

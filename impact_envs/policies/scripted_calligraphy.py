@@ -94,7 +94,7 @@ class CalligraphyExpert:
 
 
 def calligraphy_expert(compensation: str = "none") -> CalligraphyExpert:
-    """The pen-following expert of ``IMPACT/Calligraphy-v0``.
+    """The pen-following expert of ``IMPACT/Calligraphy-v1``.
 
     Raises:
         InvalidArgumentError: ``compensation`` other than ``"none"``: raised targets would lift
@@ -104,7 +104,7 @@ def calligraphy_expert(compensation: str = "none") -> CalligraphyExpert:
 
     if compensation != "none":
         raise InvalidArgumentError(
-            "IMPACT/Calligraphy-v0 has no load-compensating expert (raised targets lift the "
+            "IMPACT/Calligraphy-v1 has no load-compensating expert (raised targets lift the "
             "commanded pen tip off the paper, so the task would never press); valid: "
             "compensation='none'")
     return CalligraphyExpert(PEN_TIP_OFFSET_M, PAPER_TOP_M)

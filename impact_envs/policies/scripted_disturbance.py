@@ -51,7 +51,7 @@ def make_carry_hold_expert(grasp_z: float) -> CarryHoldExpert:
 
 
 def disturbance_expert(compensation: str = "none") -> CarryHoldExpert:
-    """Pick, carry to the goal and hold: the expert of ``IMPACT/Disturbance-v0``.
+    """Pick, carry to the goal and hold: the expert of ``IMPACT/Disturbance-v1``.
 
     Raises:
         InvalidArgumentError: ``compensation`` other than ``"none"``: the pick-and-place
@@ -62,7 +62,7 @@ def disturbance_expert(compensation: str = "none") -> CarryHoldExpert:
 
     if compensation != "none":
         raise InvalidArgumentError(
-            "IMPACT/Disturbance-v0 has no load-compensating expert (its parameter is a "
+            "IMPACT/Disturbance-v1 has no load-compensating expert (its parameter is a "
             "random, time-varying disturbance force, not a mass); valid: "
             "compensation='none'")
     return make_carry_hold_expert(REST_Z_M)

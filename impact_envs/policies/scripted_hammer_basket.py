@@ -1,4 +1,4 @@
-"""The scripted expert of ``IMPACT/HammerBasket-v0``, as the paper authors' demonstrator:
+"""The scripted expert of ``IMPACT/HammerBasket-v1``, as the paper authors' demonstrator:
 grasp the hammer at its body origin, carry it over the basket, release.
 
 Their demonstrator adds a privileged ``m g / K`` height offset after the grasp under
@@ -18,7 +18,7 @@ from impact_envs.policies.scripted import PickPlaceExpert, PickPlaceSpec
 
 def hammer_basket_expert(compensation: str = "none", grasp_yaw_obj_rad: float | None = None,
                          grasp_y_obj_m: float | None = None) -> PickPlaceExpert:
-    """The pick-and-place expert of ``IMPACT/HammerBasket-v0``: grasp point the hammer's body
+    """The pick-and-place expert of ``IMPACT/HammerBasket-v1``: grasp point the hammer's body
     origin (the scene's centre of mass less its offset), released over the basket centre.
 
     Args:

@@ -10,7 +10,7 @@ position servo whose force range is the grasp force):
   HammerBasket.
 - ``"authors_sim"``: the fingers of the paper authors' simulation, PD servos that push with
   up to 200 N each (../shared/reference/authors_impact.md): beyond a real Franka Hand, used by
-  ``IMPACT/HammerBasket-v0`` only, so that it is their benchmark (docs/hammer_basket.md).
+  ``IMPACT/HammerBasket-v1`` only, so that it is their benchmark (docs/hammer_basket.md).
 
 No kernel reads this module (it is not part of the numba kernel digest).
 """

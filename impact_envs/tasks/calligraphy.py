@@ -28,6 +28,7 @@ from impact_envs.tasks.calligraphy_strokes import (
     distance_to_path,
     place_strokes,
 )
+from impact_envs.versions import current_id
 
 PEN_TIP_OFFSET_M = 0.10
 """Pen tip along the TCP z axis [m] (0.10 m below the TCP when the hand points down)."""
@@ -76,7 +77,7 @@ class CalligraphyTask(Task):
     """Write one randomly chosen, placed and rotated character with a hand-held pen."""
 
     has_tick_hook = True
-    env_id = "IMPACT/Calligraphy-v0"
+    env_id = current_id("Calligraphy")
     env_entry_point = "impact_envs.envs.calligraphy:CalligraphyEnv"
     observations = (
         ObsEntry("object_pos", 3, -2.0, 2.0, "m", "pen-tip point, world frame"),

@@ -26,6 +26,7 @@ from impact_envs.tasks.base import (
     TaskParam,
     pick_place_reward,
 )
+from impact_envs.versions import current_id
 
 KINDS = ("constant", "step", "slow")
 """Disturbance profile kinds."""
@@ -98,7 +99,7 @@ class DisturbanceTask(Task):
     """Pick the trough, carry it to the goal point and hold it under disturbances."""
 
     has_tick_hook = True
-    env_id = "IMPACT/Disturbance-v0"
+    env_id = current_id("Disturbance")
     env_entry_point = "impact_envs.envs.disturbance:DisturbanceEnv"
     observations = (*OBJECT_POSE, ObsEntry("goal_pos", 3, -2.0, 2.0, "m", "hold goal"))
     privileged_observations = ("object_pos", "object_rot6d", "goal_pos")

@@ -17,6 +17,7 @@ from impact_envs.tasks.base import (
     TaskParam,
     pick_place_reward,
 )
+from impact_envs.versions import current_id
 
 PLATE_APOTHEM_M = 0.0433
 """Half height of the hexagonal plates [m]: the bar centre (= COM) height when lying flat."""
@@ -33,7 +34,7 @@ class DumbbellTask(Task):
     """Pick the dumbbell at its bar centre and place it flat on the pad."""
 
     name = "dumbbell"
-    env_id = "IMPACT/Dumbbell-v0"
+    env_id = current_id("Dumbbell")
     env_entry_point = "impact_envs.envs.dumbbell:DumbbellEnv"
     scene_xml = "dumbbell_scene.xml"
     object_bodies = ("dumbbell",)

@@ -17,6 +17,7 @@ from impact_envs.tasks.base import (
     TaskParam,
     pick_place_reward,
 )
+from impact_envs.versions import current_id
 
 HANDLE_HALF_HEIGHT_M = 0.0125
 """Half thickness of the square handle [m]; the hammer lies flat at this COM height."""
@@ -32,7 +33,7 @@ class HammerTask(Task):
     """Pick the hammer at its centre of mass and place it inside the basket."""
 
     name = "hammer"
-    env_id = "IMPACT/Hammer-v0"
+    env_id = current_id("Hammer")
     env_entry_point = "impact_envs.envs.hammer:HammerEnv"
     scene_xml = "hammer_scene.xml"
     object_bodies = ("hammer",)

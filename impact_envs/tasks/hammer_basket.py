@@ -26,6 +26,7 @@ from impact_envs.tasks.base import (
     TaskParam,
     pick_place_reward,
 )
+from impact_envs.versions import current_id
 
 TABLE_TOP_M = 0.23
 """Work-table top above the robot base [m] (theirs: 0.53 m table, 0.30 m pedestal)."""
@@ -52,7 +53,7 @@ class HammerBasketTask(Task):
     """Pick the hammer up anywhere and leave it over the basket by the end of the episode."""
 
     name = "hammer_basket"
-    env_id = "IMPACT/HammerBasket-v0"
+    env_id = current_id("HammerBasket")
     env_entry_point = "impact_envs.envs.hammer_basket:HammerBasketEnv"
     scene_xml = "hammer_basket_scene.xml"
     object_bodies = ("hammer",)

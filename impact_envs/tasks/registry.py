@@ -12,6 +12,7 @@ from gymnasium.envs.registration import register, registry
 
 from impact_control.errors import InvalidArgumentError
 from impact_envs.tasks.base import Task
+from impact_envs.versions import check_not_retired
 
 TASKS: dict[str, type[Task]] = {}
 """Env id -> task class, in registration order."""
@@ -41,6 +42,7 @@ def task_class(env_id: str) -> type[Task]:
     """The task registered under ``env_id`` (a one-line error naming the valid ids). The
     built-in tasks are registered by then: importing this module runs ``impact_envs``'s
     ``__init__`` first, which registers them."""
+    check_not_retired(env_id)
     if env_id not in TASKS:
         raise InvalidArgumentError(f"unknown env {env_id!r}; valid: {', '.join(TASKS)}")
     return TASKS[env_id]

@@ -84,7 +84,7 @@ def protocol_expert(env_id: str, hold_s: float) -> PickPlaceExpert:
     expert = make_expert(env_id)
     if type(expert) is not PickPlaceExpert:  # a carry-hold expert never lowers anything
         raise InvalidArgumentError(f"impact-protocol needs a pick-and-place env, not {env_id!r}; "
-                                   "valid: IMPACT/Dumbbell-v0, IMPACT/Hammer-v0")
+                                   "valid: IMPACT/Dumbbell-v1, IMPACT/Hammer-v1")
     if hold_s < 0.0:
         raise InvalidArgumentError(f"--hold-s must be >= 0 [s], got {hold_s}")
     expert.spec = replace(expert.spec, carry_dwell_steps=round(hold_s * POLICY_HZ))
@@ -233,7 +233,7 @@ def _check_masses(env_id: str, masses: tuple[float, ...]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = OneLineParser(prog="impact-protocol", description=__doc__.splitlines()[0])
-    parser.add_argument("--env", default="IMPACT/Dumbbell-v0")
+    parser.add_argument("--env", default="IMPACT/Dumbbell-v1")
     parser.add_argument("--masses", default="2.5,2.5,5", help="one mass per episode [kg]")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--hold-s", type=float, default=0.0,

@@ -1,4 +1,4 @@
-"""The paper authors' published success figure beside ours, on ``IMPACT/HammerBasket-v0``.
+"""The paper authors' published success figure beside ours, on ``IMPACT/HammerBasket-v1``.
 
 Run ``python -m impact_eval.experiments.authors_figure --table results/hammer_basket`` on a
 bin sweep (``impact-eval --mass-bins``, their 8 bins). It prints, and writes to

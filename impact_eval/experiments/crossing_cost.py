@@ -81,7 +81,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if args.calls < 1 or args.repeat < 1:
         parser.error(f"--calls and --repeat must be >= 1, got {args.calls} and {args.repeat}")
-    env = gym.make("IMPACT/Hammer-v0", controller="impact")
+    env = gym.make("IMPACT/Hammer-v1", controller="impact")
     env.reset(seed=0)
     loop_args = loop_arguments(env)
     state = loop_args[-1]

@@ -41,7 +41,7 @@ at each step of its carry phase."""
 def main(argv: list[str] | None = None) -> None:
     """Print successes and the carry-height error range per mass."""
     parser = argparse.ArgumentParser(prog="python -m impact_eval.experiments.demonstrator_gains")
-    parser.add_argument("--env", default="IMPACT/Hammer-v0", help="a pick-and-place env id")
+    parser.add_argument("--env", default="IMPACT/Hammer-v1", help="a pick-and-place env id")
     parser.add_argument("--kp", type=float, required=True, help="lift_gain [-]")
     parser.add_argument("--ki", type=float, required=True, help="lift_gain_per_s [1/s]")
     parser.add_argument("--masses", default="0.1,2,5,8", help="comma-separated [kg]")

@@ -91,7 +91,7 @@ def measure(cfg: SweepConfig, repeats: int) -> dict[str, object]:
 def main(argv: list[str] | None = None) -> int:
     """CLI entry point."""
     parser = OneLineParser(prog="determinism_cost", description=__doc__.splitlines()[0])
-    parser.add_argument("--env", default="IMPACT/Hammer-v0")
+    parser.add_argument("--env", default="IMPACT/Hammer-v1")
     parser.add_argument("--method", default="vanilla_dp,augmented_dp,impact,impact_warm")
     parser.add_argument("--masses", default="0.2,5,10")
     parser.add_argument("--episodes", type=int, default=5)

@@ -22,7 +22,7 @@ from pathlib import Path
 
 from impact_control.cli import OneLineParser
 
-SWEEP = ["--env", "IMPACT/Hammer-v0", "--method", "vanilla_dp,augmented_dp,impact,impact_warm",
+SWEEP = ["--env", "IMPACT/Hammer-v1", "--method", "vanilla_dp,augmented_dp,impact,impact_warm",
          "--masses", "0.2,5,10", "--episodes", "5"]
 SETTINGS = {
     "workers2": ["--workers", "2"],

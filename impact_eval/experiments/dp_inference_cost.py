@@ -3,7 +3,7 @@
 Usage::
 
     python -m impact_eval.experiments.dp_inference_cost [--checkpoint DIR] [--batch 32] \
-        [--threads 1] [--train] [--env IMPACT/Hammer-v0]
+        [--threads 1] [--train] [--env IMPACT/Hammer-v1]
 
 It also measures the env's own step cost in the same run and prints the ratio.
 
@@ -153,7 +153,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--cycles", type=int, default=3, help="timed replanning cycles")
     parser.add_argument("--threads", type=int, default=1, help="torch CPU threads")
     parser.add_argument("--train", action="store_true", help="also time training steps")
-    parser.add_argument("--env", default="IMPACT/Hammer-v0",
+    parser.add_argument("--env", default="IMPACT/Hammer-v1",
                         help="env whose step cost is measured in the same run ('' skips)")
     args = parser.parse_args(argv)
     torch.set_num_threads(args.threads)

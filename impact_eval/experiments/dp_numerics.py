@@ -43,7 +43,7 @@ print(hashlib.sha256(b"".join(a.tobytes() for a in (*w, *b))).hexdigest()[:16])
 def _policy() -> DiffusionPolicy:
     from impact_eval.methods import checkpoint_dir
 
-    return DiffusionPolicy.load(checkpoint_dir("IMPACT/Hammer-v0", "vanilla"))
+    return DiffusionPolicy.load(checkpoint_dir("IMPACT/Hammer-v1", "vanilla"))
 
 
 def batch_rows(policy: DiffusionPolicy, n: int = 24) -> list[str]:

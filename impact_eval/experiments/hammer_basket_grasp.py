@@ -2,7 +2,7 @@
 handle, fingers around the body origin) against ours, as success counts.
 
 Run ``python -m impact_eval.experiments.hammer_basket_grasp``. Their demonstrator under
-impedance with the privileged ``m g / K`` offset, on ``IMPACT/HammerBasket-v0``: their grasp,
+impedance with the privileged ``m g / K`` offset, on ``IMPACT/HammerBasket-v1``: their grasp,
 turned square to the handle, and turned and centred on the handle (shipped), on the same
 seeds and masses; each episode runs ``--steps`` policy steps (700: the expert has
 released the hammer and retreated by step ~650) and is scored by the task's own test.
@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
     low, high = HammerBasketTask.params[0].low, HammerBasketTask.params[0].high
     if any(not low <= m <= high for m in args.masses):
         parser.error(f"--masses {args.masses}: valid: {low:g} to {high:g} kg")
-    env = gym.make("IMPACT/HammerBasket-v0", controller="impedance")
+    env = gym.make("IMPACT/HammerBasket-v1", controller="impedance")
     for label, grasp in GRASPS.items():
         wins = [run_one(env, grasp, m, s, args.steps) for m in args.masses for s in args.seeds]
         print(f"{label}: {sum(wins)}/{len(wins)} (masses {args.masses} kg, seeds "

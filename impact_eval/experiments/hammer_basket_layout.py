@@ -1,7 +1,7 @@
 """Where on the table a HammerBasket table's episodes fail: success by the hammer's spawn.
 
 Run ``python -m impact_eval.experiments.hammer_basket_layout --table results/hammer_basket``.
-For every episode of the table it resets ``IMPACT/HammerBasket-v0`` with the episode's seed
+For every episode of the table it resets ``IMPACT/HammerBasket-v1`` with the episode's seed
 (the spawn depends on the seed alone, not on the mass or the method) and reads the hammer's
 spawn (its body origin, x and y), then prints per method the success count inside and outside
 a region of the spawn range (default: the near, far-side corner, x < 0.30 m and y < -0.35 m,
@@ -21,7 +21,7 @@ import pandas as pd
 import impact_envs  # noqa: F401 - registers the envs
 from impact_eval.metrics import wilson_interval
 
-ENV_ID = "IMPACT/HammerBasket-v0"
+ENV_ID = "IMPACT/HammerBasket-v1"
 
 
 def spawns(seeds: np.ndarray) -> pd.DataFrame:

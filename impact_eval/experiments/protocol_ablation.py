@@ -44,7 +44,7 @@ def main(argv: list[str] | None = None) -> None:
     for name in args.names:
         adaptation.PROTOCOL_CONTROLLERS = {name: ("impact", choices[name])}
         metrics = pd.concat([adaptation.phase_metrics(adaptation.run_sequence(
-            "IMPACT/Dumbbell-v0", name, (2.5, 2.5, 5.0), seed=100 * k, hold_s=6.0))
+            "IMPACT/Dumbbell-v1", name, (2.5, 2.5, 5.0), seed=100 * k, hold_s=6.0))
             for k in range(args.repeats)])
         table = metrics.groupby("phase")[["adapt_liftoff_s", "peak_err_z_settled_m"]].median()
         print(name, table.round(3).to_dict())

@@ -3,7 +3,7 @@ robot profile's torque-sensor offsets and model errors show the estimator (issue
 
     python -m impact_eval.experiments.rest_offsets [--realism fr3] [--episodes 5] [--seed 0]
 
-Each episode of ``IMPACT/Hammer-v0`` (the hammer on the table, out of reach) moves the TCP
+Each episode of ``IMPACT/Hammer-v1`` (the hammer on the table, out of reach) moves the TCP
 under plain impedance to each of ``POSES_M`` (offsets from the home TCP [m, world]) over 2 s,
 holds it 2 s and averages the controller's estimated external wrench over the last 0.5 s.
 Prints one row per episode and pose: the force's norm [N] and components, the moment's norm
@@ -30,7 +30,7 @@ MOVE_STEPS, HOLD_STEPS, AVERAGE_STEPS = 60, 60, 15
 
 def rest_wrenches(realism: str, episode_seed: int) -> list[np.ndarray]:
     """(6,) mean estimated wrench [N, Nm, world] at each of ``POSES_M``, one episode."""
-    env = gym.make("IMPACT/Hammer-v0", controller="impedance",
+    env = gym.make("IMPACT/Hammer-v1", controller="impedance",
                    robot=RobotOptions(realism=realism), object_mass=0.5)
     env.reset(seed=episode_seed)
     u = env.unwrapped

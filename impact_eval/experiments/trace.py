@@ -2,7 +2,7 @@
 
 Usage::
 
-    python -m impact_eval.experiments.trace --env IMPACT/Hammer-v0 --method augmented_dp \
+    python -m impact_eval.experiments.trace --env IMPACT/Hammer-v1 --method augmented_dp \
         --value 0.1 --seed 1
 
 Columns: policy step, TCP height, commanded target height, gripper command, object height,
@@ -81,7 +81,7 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
 def main(argv: list[str] | None = None) -> None:
     """Entry point."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--env", default="IMPACT/Hammer-v0")
+    parser.add_argument("--env", default="IMPACT/Hammer-v1")
     parser.add_argument("--method", required=True, help="a method name of impact-eval")
     parser.add_argument("--value", type=float, required=True, help="the env's parameter value")
     parser.add_argument("--seed", type=int, default=1)

@@ -66,7 +66,7 @@ CHECK = textwrap.dedent('''
     assert impact_envs.__file__.startswith({root!r}), impact_envs.__file__
     assert impact_control.__file__.startswith({root!r}), impact_control.__file__
     assert any(p.name == "friction_observer.py" for p in jit_cache.kernel_sources())
-    env = gym.make("IMPACT/Hammer-v0", controller="impact")
+    env = gym.make("IMPACT/Hammer-v1", controller="impact")
     obs, _ = env.reset(seed=3)
     ctrl = env.unwrapped.controller
     names = [k for k in ctrl.state_arrays() if k.startswith("fo.")]

@@ -60,19 +60,19 @@ def test_make_env_applies_overrides_and_resume_refuses_other_overrides() -> None
     from impact_eval.envs import make_env
     from impact_eval.runinfo import RunIdentity, check_resumable
 
-    env = make_env("IMPACT/Hammer-v0", "impact", ("internal_model.slow_rate_max=1.5",))
+    env = make_env("IMPACT/Hammer-v1", "impact", ("internal_model.slow_rate_max=1.5",))
     assert env.unwrapped.controller.config.internal_model.slow_rate_max == 1.5
     env.close()
-    plain = make_env("IMPACT/Hammer-v0", "impact")
+    plain = make_env("IMPACT/Hammer-v1", "impact")
     assert plain.unwrapped.controller.config == ControllerConfig()
     plain.close()
     previous = {
-        "env": "IMPACT/Hammer-v0",
+        "env": "IMPACT/Hammer-v1",
         "seed": 0,
         "param_name": "object_mass",
         "controller_overrides": [],
     }
-    same = RunIdentity("IMPACT/Hammer-v0", 0, "object_mass", (), ("impact",), (1.0,), 5)
+    same = RunIdentity("IMPACT/Hammer-v1", 0, "object_mass", (), ("impact",), (1.0,), 5)
     check_resumable(previous, same)
     with pytest.raises(InvalidArgumentError, match="controller_overrides"):
         other = ("slow_wrench.clip_force_n=5",)

@@ -71,21 +71,21 @@ def test_estimator_kind_is_chosen_on_the_preset() -> None:
 
 def test_env_kwarg_selects_the_preset_and_info_reports_it() -> None:
     for name in PRESETS:
-        env = gym.make("IMPACT/Hammer-v0", controller_preset=name)
+        env = gym.make("IMPACT/Hammer-v1", controller_preset=name)
         _, info = env.reset(seed=0)
         assert env.unwrapped.controller.config == preset_config(name)
         assert info["controller_preset"] == name
         env.close()
     custom = apply_overrides(ControllerConfig(), ["internal_model.learning_rate=0.02"])
-    env = gym.make("IMPACT/Hammer-v0", controller_preset=custom)
+    env = gym.make("IMPACT/Hammer-v1", controller_preset=custom)
     assert env.reset(seed=0)[1]["controller_preset"] == "custom"
     env.close()
     with pytest.raises(InvalidArgumentError, match="valid choices: default, paper"):
-        gym.make("IMPACT/Hammer-v0", controller_preset="literal")
+        gym.make("IMPACT/Hammer-v1", controller_preset="literal")
 
 
 def test_warm_start_restores_weights_and_replay_at_every_reset() -> None:
-    env = gym.make("IMPACT/Hammer-v0")
+    env = gym.make("IMPACT/Hammer-v1")
     model = env.unwrapped.controller.internal_model
     fresh = model.snapshot()
     model.net.weights[0][...] += 0.01

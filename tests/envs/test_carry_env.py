@@ -16,7 +16,7 @@ from impact_envs.envs.carry import ControllerCarry, episode_views
 from impact_envs.envs.options import RobotOptions
 from impact_envs.policies.experts import make_expert
 
-ENV_ID = "IMPACT/Hammer-v0"
+ENV_ID = "IMPACT/Hammer-v1"
 MASS = {"object_mass": 2.5}
 STEPS = 110  # the scripted expert has lifted the 2.5 kg hammer for about 0.7 s: a hold
 

@@ -95,12 +95,12 @@ def test_refused_forms_are_one_line(case: str) -> None:
 def test_gym_make_refuses_before_building(kwargs: dict) -> None:
     """The env itself refuses (no AttributeError from deep inside the constructor)."""
     with pytest.raises(InvalidArgumentError):
-        gym.make("IMPACT/Dumbbell-v0", **kwargs)
+        gym.make("IMPACT/Dumbbell-v1", **kwargs)
 
 
 def test_gym_make_takes_a_dict_and_a_string() -> None:
     """``observation="rgb"`` and ``robot={...}`` used to raise AttributeError."""
-    env = gym.make("IMPACT/Hammer-v0", observation="rgb",
+    env = gym.make("IMPACT/Hammer-v1", observation="rgb",
                    robot={"sensor_noise": False, "grasp_force_n": 100})
     try:
         assert env.unwrapped.observation_options == ObservationOptions(obs_mode="rgb")
@@ -132,7 +132,7 @@ def test_grasp_forces_above_the_franka_hand_are_one_line(force: float) -> None:
     with pytest.raises(InvalidArgumentError, match=r"^invalid grasp_force_n .*at most 140 N"):
         RobotOptions(grasp_force_n=force, hand="franka_hand")
     with pytest.raises(InvalidArgumentError, match=r"^invalid grasp_force_n .*at most 140 N"):
-        gym.make("IMPACT/Hammer-v0", robot=RobotOptions(grasp_force_n=force))
+        gym.make("IMPACT/Hammer-v1", robot=RobotOptions(grasp_force_n=force))
 
 
 def test_no_grasp_force_means_the_hands_default() -> None:

@@ -97,13 +97,13 @@ def _not_a_generator(state):
 
 # name: (maker of the env the state comes from, damage to the state, message part)
 BAD_STATES = {
-    "another task": (lambda: gym.make("IMPACT/Dumbbell-v0"), None, "task"),
-    "impedance env": (lambda: gym.make("IMPACT/Hammer-v0", controller="impedance"), None,
+    "another task": (lambda: gym.make("IMPACT/Dumbbell-v1"), None, "task"),
+    "impedance env": (lambda: gym.make("IMPACT/Hammer-v1", controller="impedance"), None,
                       "controller"),
-    "paper preset": (lambda: gym.make("IMPACT/Hammer-v0", controller_preset="paper"), None,
+    "paper preset": (lambda: gym.make("IMPACT/Hammer-v1", controller_preset="paper"), None,
                      "preset"),
     "momentum estimator": (lambda: gym.make(
-        "IMPACT/Hammer-v0", controller_preset=preset_config("default", estimator="momentum")),
+        "IMPACT/Hammer-v1", controller_preset=preset_config("default", estimator="momentum")),
         None, "config differ"),
     "weight cut to one row": (None, _cut_weight, "weight"),
     "array cut short": (None, _cut_array, "array controller"),
@@ -118,11 +118,11 @@ BAD_STATES = {
 @pytest.mark.parametrize("case", sorted(BAD_STATES))
 def test_a_foreign_or_damaged_state_is_refused_and_changes_nothing(case):
     make_source, damage, message = BAD_STATES[case]
-    env = gym.make("IMPACT/Hammer-v0")
+    env = gym.make("IMPACT/Hammer-v1")
     env.reset(seed=3)
     for _ in range(5):
         env.step(env.action_space.sample() * 0 + env.unwrapped.action_space.low)
-    source = (make_source or (lambda: gym.make("IMPACT/Hammer-v0")))()
+    source = (make_source or (lambda: gym.make("IMPACT/Hammer-v1")))()
     source.reset(seed=8)
     state = source.unwrapped.get_state()
     if callable(damage):
@@ -169,7 +169,7 @@ def test_every_array_a_stage_keeps_is_in_the_snapshot_or_declared_stateless(pres
     """A stage that keeps state outside ``kernels.ControllerState`` fails here, not silently
     in get_state / set_state: each of its arrays must share memory with a snapshot array or
     be named in its class's ``STATELESS``."""
-    env = gym.make("IMPACT/Hammer-v0", controller="impact", controller_preset=preset)
+    env = gym.make("IMPACT/Hammer-v1", controller="impact", controller_preset=preset)
     hidden = _hidden_arrays(env.unwrapped.controller)
     assert not hidden, f"arrays outside the controller's named state: {hidden}"
     env.close()
@@ -180,7 +180,7 @@ def test_a_stage_added_without_its_state_is_caught():
     ``kernel_state()`` is reported by the check above."""
     from impact_control.slow_filter import SlowWrenchFilter
 
-    env = gym.make("IMPACT/Hammer-v0", controller="impact")
+    env = gym.make("IMPACT/Hammer-v1", controller="impact")
     ctrl = env.unwrapped.controller
     ctrl.extra_filter = SlowWrenchFilter(ctrl.config.slow_wrench, ctrl.config.dt_s)
     assert any(h.startswith("controller.extra_filter.") for h in _hidden_arrays(ctrl))

@@ -84,7 +84,7 @@ def test_reset_option_sets_parameter_and_mass_is_reported(env_id):
 
 
 def test_mass_is_set_from_nominal_not_compounded():
-    env = gym.make("IMPACT/Hammer-v0").unwrapped
+    env = gym.make("IMPACT/Hammer-v1").unwrapped
     body = env.task.mass.id
     for m in (2.0, 5.0, 2.0):
         env.reset(seed=0, options={"object_mass": m})
@@ -105,19 +105,19 @@ def test_mass_is_set_from_nominal_not_compounded():
 )
 def test_bad_kwargs_give_one_line_errors(kwargs, match):
     with pytest.raises(InvalidArgumentError, match=match) as err:
-        gym.make("IMPACT/Hammer-v0", **kwargs)
+        gym.make("IMPACT/Hammer-v1", **kwargs)
     assert "\n" not in str(err.value)
 
 
 def test_bad_reset_option():
-    env = gym.make("IMPACT/Hammer-v0")
+    env = gym.make("IMPACT/Hammer-v1")
     with pytest.raises(InvalidArgumentError, match="valid: object_mass"):
         env.reset(seed=0, options={"friction": 1.0})
 
 
 @pytest.mark.parametrize("value", [True, np.bool_(False), "3", None, [2.0], np.array([2.0])])
 def test_reset_option_must_be_a_real_number(value):
-    env = gym.make("IMPACT/Hammer-v0")
+    env = gym.make("IMPACT/Hammer-v1")
     with pytest.raises(InvalidArgumentError, match="object_mass must be a real number") as err:
         env.reset(seed=0, options={"object_mass": value})
     assert "\n" not in str(err.value)
@@ -127,7 +127,7 @@ def test_reset_option_must_be_a_real_number(value):
 
 @pytest.mark.parametrize("shape", [(10, 1), (1, 10), (2, 5), (11,), (9,), ()])
 def test_action_of_wrong_shape_is_refused_not_reshaped(shape):
-    env = gym.make("IMPACT/Hammer-v0")
+    env = gym.make("IMPACT/Hammer-v1")
     env.reset(seed=0)
     with pytest.raises(InvalidArgumentError, match=r"\(10,\) array"):
         env.step(np.zeros(shape, dtype=np.float32))
@@ -143,13 +143,13 @@ def test_registered_episode_length_matches_task(env_id):
 
 
 def test_expert_privileged_compensation_raises_targets_by_mg_over_k():
-    expert = make_expert("IMPACT/Hammer-v0", compensation="privileged")
+    expert = make_expert("IMPACT/Hammer-v1", compensation="privileged")
     with pytest.raises(InvalidArgumentError, match="object_mass_kg"):
         expert.reset(1)
-    env = gym.make("IMPACT/Hammer-v0", object_mass=4.0)
+    env = gym.make("IMPACT/Hammer-v1", object_mass=4.0)
     obs, _ = env.reset(seed=0)
     expert.reset(1, object_mass_kg=np.array([4.0]))
-    plain = make_expert("IMPACT/Hammer-v0")
+    plain = make_expert("IMPACT/Hammer-v1")
     plain.reset(1)
     for _ in range(200):  # until both are carrying
         a = expert.act(stack_obs([obs]))[0]
@@ -165,9 +165,9 @@ def test_expert_privileged_compensation_raises_targets_by_mg_over_k():
 def test_expert_closed_loop_compensation_finds_the_sag_without_the_mass():
     """Under plain impedance (K_z = 400 N/m) a 4 kg hammer sags m g / K = 9.8 cm; the
     closed-loop expert, told no mass, lifts it and carries it with an offset near that sag."""
-    env = gym.make("IMPACT/Hammer-v0", object_mass=4.0, controller="impedance")
+    env = gym.make("IMPACT/Hammer-v1", object_mass=4.0, controller="impedance")
     obs, _ = env.reset(seed=0)
-    expert = make_expert("IMPACT/Hammer-v0", compensation="closed_loop")
+    expert = make_expert("IMPACT/Hammer-v1", compensation="closed_loop")
     expert.reset(1)
     offsets = []
     for _ in range(400):
@@ -180,7 +180,7 @@ def test_expert_closed_loop_compensation_finds_the_sag_without_the_mass():
     assert len(offsets) > 10
     assert offsets[-1] == pytest.approx(sag_m, rel=0.25)
     with pytest.raises(InvalidArgumentError, match="valid choices: none, closed_loop"):
-        make_expert("IMPACT/Hammer-v0", compensation="psychic")
+        make_expert("IMPACT/Hammer-v1", compensation="psychic")
 
 
 
@@ -239,7 +239,7 @@ BAD_OPTIONS = {
 def test_bad_robot_and_render_options_are_one_line(case):
     kwargs, message = BAD_OPTIONS[case]
     with pytest.raises(InvalidArgumentError) as err:
-        gym.make("IMPACT/Hammer-v0", **{k: v() if callable(v) else v for k, v in kwargs.items()})
+        gym.make("IMPACT/Hammer-v1", **{k: v() if callable(v) else v for k, v in kwargs.items()})
     assert message in str(err.value) and "\n" not in str(err.value)
 
 
@@ -250,14 +250,14 @@ def test_bad_robot_and_render_options_are_one_line(case):
     (None, "0", "invalid seed '0'"),
 ])
 def test_bad_reset_arguments_are_one_line(options, seed, message):
-    env = gym.make("IMPACT/Hammer-v0")
+    env = gym.make("IMPACT/Hammer-v1")
     with pytest.raises(InvalidArgumentError) as err:
         env.reset(seed=seed, options=options)
     assert message in str(err.value) and "\n" not in str(err.value)
 
 
 def test_a_refused_first_reset_does_not_break_the_env():
-    env = gym.make("IMPACT/Hammer-v0")
+    env = gym.make("IMPACT/Hammer-v1")
     with pytest.raises(InvalidArgumentError):
         env.reset(options={"object_mass": -1.0})
     env.reset(seed=0)

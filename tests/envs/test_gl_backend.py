@@ -123,7 +123,7 @@ def test_camera_observation_renders_without_mujoco_gl_or_display() -> None:
     done = _python(
         "import gymnasium as gym, impact_envs\n"
         "from impact_envs import ObservationOptions\n"
-        "env = gym.make('IMPACT/Hammer-v0', observation=ObservationOptions(obs_mode='rgb', "
+        "env = gym.make('IMPACT/Hammer-v1', observation=ObservationOptions(obs_mode='rgb', "
         "cameras=('overview',), image_width=32, image_height=24))\n"
         "obs, _ = env.reset(seed=0)\n"
         "img = obs['overview_rgb']\n"
@@ -165,7 +165,7 @@ def test_no_gl_context_is_one_line_at_construction() -> None:
         "import gymnasium as gym, impact_envs\n"
         "from impact_control.errors import RenderingError\n"
         "try:\n"
-        "    gym.make('IMPACT/Dumbbell-v0', observation='rgbd')\n"
+        "    gym.make('IMPACT/Dumbbell-v1', observation='rgbd')\n"
         "except RenderingError as exc:\n"
         "    print(str(exc))\n", MUJOCO_GL="glfw")
     assert done.returncode == 0, done.stderr[-2000:]

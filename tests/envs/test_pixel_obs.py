@@ -95,7 +95,7 @@ def test_keys_shapes_dtypes_and_hidden_state(env_id, mode):
 
 
 def test_calligraphy_keeps_its_reference_and_hides_the_pen():
-    env = _make("IMPACT/Calligraphy-v0", "rgb")
+    env = _make("IMPACT/Calligraphy-v1", "rgb")
     assert "goal_pos" in env.observation_space.spaces
     assert not {"object_pos", "object_rot6d"} & set(env.observation_space.spaces)
     env.close()
@@ -145,7 +145,7 @@ def test_a_deep_copy_renders_the_same_next_images():
 def test_wrist_camera_sees_the_fingers_close():
     """Closing the gripper changes the wrist image far more than holding it open."""
     def wrist_change(gripper: float) -> float:
-        env = _make("IMPACT/Hammer-v0", "rgb", cameras=("wrist",))
+        env = _make("IMPACT/Hammer-v1", "rgb", cameras=("wrist",))
         obs, _ = env.reset(seed=0)
         for _ in range(10):
             last, *_ = env.step(_hold(obs, gripper))
@@ -160,7 +160,7 @@ def test_wrist_camera_sees_the_fingers_close():
 def test_depth_is_metres_along_the_optical_axis(camera):
     """The centre pixel (odd size: on the optical axis) reads the distance that a ray cast
     from the camera along its axis finds to the first visible geom."""
-    env = _make("IMPACT/Dumbbell-v0", "rgbd", cameras=(camera,), width=41, height=41)
+    env = _make("IMPACT/Dumbbell-v1", "rgbd", cameras=(camera,), width=41, height=41)
     obs, _ = env.reset(seed=0)
     m, d = env.unwrapped.sim.model, env.unwrapped.sim.data
     cam = m.camera(camera).id

@@ -29,7 +29,7 @@ def test_every_action_in_the_box_is_valid(env_id, mode, recwarn):
 
 
 def test_absolute_mode_spans_the_workspace_box():
-    env = RLActions(gym.make("IMPACT/Hammer-v0"))
+    env = RLActions(gym.make("IMPACT/Hammer-v1"))
     task = env.unwrapped.task
     a = np.concatenate([[-1.0, 1.0, 0.0], np.zeros(7)])
     np.testing.assert_allclose(env.action(a)[:3],
@@ -38,7 +38,7 @@ def test_absolute_mode_spans_the_workspace_box():
 
 
 def test_delta_mode_moves_the_target_by_the_scaled_step():
-    env = RLActions(gym.make("IMPACT/Hammer-v0"), mode="delta", max_step_m=0.02,
+    env = RLActions(gym.make("IMPACT/Hammer-v1"), mode="delta", max_step_m=0.02,
                     max_turn_rad=0.1)
     env.reset(seed=0)
     base = env.unwrapped
@@ -53,13 +53,13 @@ def test_delta_mode_moves_the_target_by_the_scaled_step():
 
 def test_unknown_mode_is_one_line():
     with pytest.raises(InvalidArgumentError, match="valid choices: absolute, delta"):
-        RLActions(gym.make("IMPACT/Hammer-v0"), mode="relative")
+        RLActions(gym.make("IMPACT/Hammer-v1"), mode="relative")
 
 
 @pytest.mark.parametrize("algo", ["PPO", "SAC"])
 def test_sb3_trains_a_few_hundred_steps(algo):
     sb3 = pytest.importorskip("stable_baselines3")
-    env = RLActions(gym.make("IMPACT/Hammer-v0"), mode="delta")
+    env = RLActions(gym.make("IMPACT/Hammer-v1"), mode="delta")
     kwargs = {"n_steps": 64, "batch_size": 32} if algo == "PPO" else {"learning_starts": 32,
                                                                       "batch_size": 32}
     model = getattr(sb3, algo)("MultiInputPolicy", env, seed=0, device="cpu", **kwargs)
@@ -72,7 +72,7 @@ def test_a_physics_blow_up_ends_the_episode_instead_of_raising(monkeypatch):
     training; the wrapper turns it into a terminated episode with the reason in info."""
     from impact_control.errors import SimulationError
 
-    env = RLActions(gym.make("IMPACT/Disturbance-v0"), mode="delta")
+    env = RLActions(gym.make("IMPACT/Disturbance-v1"), mode="delta")
     first, _ = env.reset(seed=0)
 
     def blow_up(*args, **kwargs):
@@ -108,7 +108,7 @@ BAD_ACTIONS = {
 @pytest.mark.parametrize("case", sorted(BAD_ACTIONS))
 def test_bad_actions_are_one_line_and_change_nothing(case):
     mode, action, message = BAD_ACTIONS[case]
-    env = RLActions(gym.make("IMPACT/Hammer-v0"), mode=mode)
+    env = RLActions(gym.make("IMPACT/Hammer-v1"), mode=mode)
     env.reset(seed=0)
     base = env.unwrapped
     before = (base.target_pos_world.copy(), base.sim.data.time)
@@ -119,7 +119,7 @@ def test_bad_actions_are_one_line_and_change_nothing(case):
 
 
 def test_finite_actions_outside_the_box_are_clipped():
-    env = RLActions(gym.make("IMPACT/Hammer-v0"))
+    env = RLActions(gym.make("IMPACT/Hammer-v1"))
     a = np.r_[[5.0, -7.0, 0.0], np.zeros(7)]
     b = np.r_[[1.0, -1.0, 0.0], np.zeros(7)]
     np.testing.assert_array_equal(env.action(a), env.action(b))
@@ -135,7 +135,7 @@ def test_finite_actions_outside_the_box_are_clipped():
 ])
 def test_bad_wrapper_arguments_are_one_line(kwargs, message):
     with pytest.raises(InvalidArgumentError) as err:
-        RLActions(gym.make("IMPACT/Hammer-v0"), mode="delta", **kwargs)
+        RLActions(gym.make("IMPACT/Hammer-v1"), mode="delta", **kwargs)
     assert message in str(err.value) and "\n" not in str(err.value)
 
 

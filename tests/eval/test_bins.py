@@ -122,7 +122,7 @@ def test_bad_bin_requests_are_one_line_and_write_nothing(tmp_path: Path, capsys,
 
 def test_a_bin_beyond_the_tasks_range_is_one_line(tmp_path: Path, capsys) -> None:
     """Both edges are probed: the Hammer task takes masses up to 12 kg."""
-    code = _exit_code(["--env", "IMPACT/Hammer-v0", "--method", "scripted", "--mass-bins",
+    code = _exit_code(["--env", "IMPACT/Hammer-v1", "--method", "scripted", "--mass-bins",
                        "8-14", "--episodes", "1", "--workers", "1",
                        "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err

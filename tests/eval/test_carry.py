@@ -25,7 +25,7 @@ from impact_eval.methods import MethodSpec, register_method, resolve_method
 from impact_eval.spec import RunOptions, SweepSpec
 from impact_eval.sweep import SweepConfig, plan_tasks
 
-BARE_ID = "ImpactCarryTest/Hammer-v0"
+BARE_ID = "ImpactCarryTest/Hammer-v1"
 ENV_ID = f"eval.test_carry:{BARE_ID}"
 SHORT_STEPS = 12
 CARRIED, FRESH = "scripted_authors_carry_test", "scripted_authors_fresh_test"
@@ -34,7 +34,7 @@ CARRIED, FRESH = "scripted_authors_carry_test", "scripted_authors_fresh_test"
 def _hammer_expert(_env_id: str, _env: gym.Env) -> object:
     from impact_envs.policies.experts import make_expert
 
-    return make_expert("IMPACT/Hammer-v0")
+    return make_expert("IMPACT/Hammer-v1")
 
 
 if BARE_ID not in gym.registry:
@@ -208,7 +208,7 @@ def test_the_authors_methods() -> None:
 def test_a_method_env_gets_the_robot_options() -> None:
     from impact_eval.envs import method_env
 
-    env = method_env("IMPACT/Hammer-v0", resolve_method("scripted_impact_authors"))
+    env = method_env("IMPACT/Hammer-v1", resolve_method("scripted_impact_authors"))
     try:
         base = env.unwrapped
         assert base.sim.torque_reading == "commanded"

@@ -20,7 +20,7 @@ from impact_eval.methods import CHECKPOINTS_ENV_VAR
 from impact_learn import collect as collect_module
 from impact_learn import train as train_module
 
-HAMMER = ("--env", "IMPACT/Hammer-v0")
+HAMMER = ("--env", "IMPACT/Hammer-v1")
 
 # name: (command, arguments replacing / added to the command's valid base, message part)
 CASES: dict[str, tuple[str, tuple[str, ...], str]] = {
@@ -55,17 +55,17 @@ CASES: dict[str, tuple[str, tuple[str, ...], str]] = {
         "pass --beyond-hardware-limits"),
     "eval report of a missing dir": ("report", ("{tmp}/nothing",), "nothing"),
     # impact-collect (base: one Hammer demo into {tmp}/x.zarr)
-    "collect unknown env": ("collect", ("--env", "Foo/Bar-v0"), "valid: IMPACT/Hammer-v0"),
+    "collect unknown env": ("collect", ("--env", "Foo/Bar-v0"), "valid: IMPACT/Hammer-v1"),
     "collect unknown controller": ("collect", ("--controller", "pid"),
                                    "valid choices: impedance, impact"),
     "collect malformed range": ("collect", ("--mass-range", "3"), "LO:HI"),
     "collect unknown compensation": ("collect", ("--compensation", "psychic"),
                                      "valid choices: none, closed_loop, privileged"),
     "collect compensation of calligraphy": (
-        "collect", ("--env", "IMPACT/Calligraphy-v0", "--compensation", "closed_loop"),
+        "collect", ("--env", "IMPACT/Calligraphy-v1", "--compensation", "closed_loop"),
         "compensation='none'"),
     "collect compensation of disturbance": (
-        "collect", ("--env", "IMPACT/Disturbance-v0", "--compensation", "closed_loop"),
+        "collect", ("--env", "IMPACT/Disturbance-v1", "--compensation", "closed_loop"),
         "compensation='none'"),
     "collect mass list out of range": ("collect", ("--mass-list", "50,1"),
                                        "object_mass=50.0 out of range"),

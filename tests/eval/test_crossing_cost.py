@@ -10,7 +10,7 @@ from impact_eval.experiments.crossing_cost import loop_arguments, main
 
 
 def test_loop_arguments_are_the_closed_loops_and_the_report_prints(capsys) -> None:
-    env = gym.make("IMPACT/Hammer-v0", controller="impact")
+    env = gym.make("IMPACT/Hammer-v1", controller="impact")
     env.reset(seed=0)
     args = loop_arguments(env)
     assert len(args) == 7 and isinstance(args[-1], ControllerState)

@@ -105,7 +105,7 @@ def test_bad_input_in_a_real_process(tmp_path: Path) -> None:
 def test_missing_sweep_options_name_quick(capsys):
     from impact_eval.cli import main
 
-    assert main(["--env", "IMPACT/Hammer-v0", "--out", "/tmp/impact-never-written"]) == 2
+    assert main(["--env", "IMPACT/Hammer-v1", "--out", "/tmp/impact-never-written"]) == 2
     err = capsys.readouterr().err.strip()
     assert "missing --method, --masses/--param-values" in err and "--quick" in err
     assert "\n" not in err
@@ -115,7 +115,7 @@ def test_quick_fills_defaults_and_explicit_options_win():
     from impact_eval.sweep_command import _with_defaults, sweep_parser
 
     args = _with_defaults(sweep_parser().parse_args(["--quick", "--episodes", "2"]))
-    assert args.env == "IMPACT/Hammer-v0" and args.grid == "0.2,2.5,5,7.5,10"
+    assert args.env == "IMPACT/Hammer-v1" and args.grid == "0.2,2.5,5,7.5,10"
     assert args.episodes == 2 and str(args.out) == "results/quickstart"
     assert args.method in ("scripted,scripted_impact,scripted_impact_paper",
                            "vanilla_dp,augmented_dp,impact,impact_paper")
@@ -124,7 +124,7 @@ def test_quick_fills_defaults_and_explicit_options_win():
 def test_param_selects_a_declared_secondary_parameter(tmp_path):
     from impact_eval.envs import check_param, describe_env, make_env
 
-    env = make_env("IMPACT/Calligraphy-v0", "impedance")
+    env = make_env("IMPACT/Calligraphy-v1", "impedance")
     info = describe_env(env, "surface_friction")
     assert info.param_name == "surface_friction"
     assert info.param_names == ("tool_mass", "surface_friction")
@@ -164,7 +164,7 @@ def test_sweep_workers_are_single_threaded() -> None:
 
 def test_beyond_hardware_limits_flag_allows_and_records_it(tmp_path: Path) -> None:
     out = tmp_path / "out"
-    args = ["--env", "IMPACT/Hammer-v0", "--method", "scripted", "--masses", "0.2",
+    args = ["--env", "IMPACT/Hammer-v1", "--method", "scripted", "--masses", "0.2",
             "--episodes", "1", "--workers", "1", "--out", str(out),
             "--controller-set", "limits.torque_rate_max_nm_per_s=2000"]
     assert main(args) == 2  # refused without the flag, nothing written

@@ -115,7 +115,7 @@ def test_plot_axis_label_takes_the_unit_the_task_declares():
     def label(env_id: str, name: str) -> str:
         return param_label(pd.DataFrame({"env_id": [env_id], "param_name": [name]}))
 
-    assert label("IMPACT/Hammer-v0", "object_mass") == "object mass [kg]"
-    assert label("IMPACT/Disturbance-v0", "disturbance_n") == "disturbance n [N]"
-    assert label("IMPACT/Calligraphy-v0", "surface_friction") == "surface friction"
+    assert label("IMPACT/Hammer-v1", "object_mass") == "object mass [kg]"
+    assert label("IMPACT/Disturbance-v1", "disturbance_n") == "disturbance n [N]"
+    assert label("IMPACT/Calligraphy-v1", "surface_friction") == "surface friction"
     assert label("test_eval_fake:ImpactTest/Fake-v0", "object_mass") == "object mass"

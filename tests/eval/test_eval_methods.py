@@ -40,13 +40,13 @@ def test_builtin_methods_and_controllers() -> None:
 
 
 def test_checkpoint_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    assert env_short_name("IMPACT/Hammer-v0") == "hammer"
+    assert env_short_name("IMPACT/Hammer-v1") == "hammer"
     assert env_short_name("pkg.mod:IMPACT/PickPlace-v12") == "pickplace"
     monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(tmp_path))
     (tmp_path / "hammer" / "augmented").mkdir(parents=True)
-    assert checkpoint_dir("IMPACT/Hammer-v0", "augmented") == tmp_path / "hammer" / "augmented"
-    with pytest.raises(CheckpointError, match="no vanilla checkpoint for IMPACT/Hammer-v0"):
-        checkpoint_dir("IMPACT/Hammer-v0", "vanilla")
+    assert checkpoint_dir("IMPACT/Hammer-v1", "augmented") == tmp_path / "hammer" / "augmented"
+    with pytest.raises(CheckpointError, match="no vanilla checkpoint for IMPACT/Hammer-v1"):
+        checkpoint_dir("IMPACT/Hammer-v1", "vanilla")
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +105,7 @@ def test_trace_prints_one_episode():
     """python -m impact_eval.experiments.trace: header, sampled rows, and the outcome line."""
     import impact_eval.experiments.trace as trace_mod
 
-    lines = trace_mod.trace("IMPACT/Hammer-v0", "scripted_impact", 0.2, seed=0, every=60)
+    lines = trace_mod.trace("IMPACT/Hammer-v1", "scripted_impact", 0.2, seed=0, every=60)
     assert lines[0] == trace_mod.HEADER
     assert lines[-1].startswith("success: True")
     assert len(lines) >= 4
@@ -124,7 +124,7 @@ def test_trace_without_joint_friction_zeroes_the_plants_friction(monkeypatch):
         return made[-1]
 
     monkeypatch.setattr(trace_mod, "make_env", recording_make_env)
-    lines = trace_mod.trace("IMPACT/Calligraphy-v0", "scripted", 0.1, seed=0, every=1000,
+    lines = trace_mod.trace("IMPACT/Calligraphy-v1", "scripted", 0.1, seed=0, every=1000,
                             joint_friction=False)
     sim = made[0].unwrapped.sim
     assert np.all(sim.model.dof_frictionloss[sim.arm_dof] == 0.0)
@@ -194,7 +194,7 @@ def test_sb3_model_trained_on_rl_actions_is_evaluated_in_its_mode(tmp_path, monk
     from impact_envs.wrappers import RLActions
     from impact_eval.sb3 import sb3_action_mode
 
-    venv = VecNormalize(DummyVecEnv([lambda: RLActions(gym.make("IMPACT/Hammer-v0"),
+    venv = VecNormalize(DummyVecEnv([lambda: RLActions(gym.make("IMPACT/Hammer-v1"),
                                                        mode="delta")]), norm_reward=False)
     model = sb3.SAC("MultiInputPolicy", venv, learning_starts=8, batch_size=8, seed=0,
                     device="cpu")
@@ -204,7 +204,7 @@ def test_sb3_model_trained_on_rl_actions_is_evaluated_in_its_mode(tmp_path, monk
     venv.save(tmp_path / "vec_normalize.pkl")
     assert sb3_action_mode(str(zip_path)) == "delta"
     monkeypatch.setenv("IMPACT_TRUST_SB3", "1")
-    env = RLActions(gym.make("IMPACT/Hammer-v0"), mode="delta")
+    env = RLActions(gym.make("IMPACT/Hammer-v1"), mode="delta")
     policy = load_sb3(str(zip_path), env)
     assert policy.vecnormalize is not None
     obs, _ = env.reset(seed=0)
@@ -229,7 +229,7 @@ def test_camera_methods_make_their_envs_with_the_checkpoint_cameras():
     assert (rgb.controller, impact_rgb.controller) == ("impedance", "impact")
     assert (paper.controller, paper.preset, impact_rgb.preset) == ("impact", "paper", "default")
     assert rgb.env_key != resolve_method("vanilla_dp").env_key
-    env = method_env("IMPACT/Hammer-v0", rgb)
+    env = method_env("IMPACT/Hammer-v1", rgb)
     try:
         spaces = env.observation_space.spaces
         assert spaces["overview_rgb"].shape == spaces["wrist_rgb"].shape == (96, 96, 3)

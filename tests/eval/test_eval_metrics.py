@@ -81,14 +81,14 @@ def test_scene_contact_counts_the_object_beyond_its_declared_support() -> None:
     assert scene_contact({}) == (None, None)
 
 
-@pytest.mark.parametrize("env_id", ["IMPACT/Hammer-v0", "IMPACT/Dumbbell-v0",
-                                    "IMPACT/Calligraphy-v0", "IMPACT/Disturbance-v0"])
+@pytest.mark.parametrize("env_id", ["IMPACT/Hammer-v1", "IMPACT/Dumbbell-v1",
+                                    "IMPACT/Calligraphy-v1", "IMPACT/Disturbance-v1"])
 def test_each_task_declares_its_supported_weight(env_id) -> None:
     env = gym.make(env_id)
     _, info = env.reset(seed=0)
     task = env.unwrapped.task
     mass = info.get("object_mass")
-    expected = 0.0 if env_id == "IMPACT/Calligraphy-v0" else 9.81 * mass
+    expected = 0.0 if env_id == "IMPACT/Calligraphy-v1" else 9.81 * mass
     assert info["supported_weight_n"] == task.supported_weight_n(env.unwrapped._episode_params)
     assert info["supported_weight_n"] == pytest.approx(expected)
     env.close()
@@ -98,7 +98,7 @@ def test_env_contact_trace_is_per_tick_and_peaks_at_the_peak() -> None:
     from impact_control.policy import stack_obs
     from impact_envs.policies.experts import make_expert
 
-    env, expert = gym.make("IMPACT/Hammer-v0"), make_expert("IMPACT/Hammer-v0")
+    env, expert = gym.make("IMPACT/Hammer-v1"), make_expert("IMPACT/Hammer-v1")
     obs, _ = env.reset(seed=3)
     expert.reset(1)
     peaks = []

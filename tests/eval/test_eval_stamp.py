@@ -17,7 +17,7 @@ def _results(tmp_path):
     rows = [("augmented_dp", 0.1, 1), ("augmented_dp", 0.1, 0), ("augmented_dp", 2.5, 1),
             ("vanilla_dp", 0.1, 1)]
     (res / "episodes.csv").write_text(HEADER + "".join(
-        f"{m},IMPACT/Hammer-v0,object_mass,{v},{i},{i},{s}\n" for i, (m, v, s) in enumerate(rows)))
+        f"{m},IMPACT/Hammer-v1,object_mass,{v},{i},{i},{s}\n" for i, (m, v, s) in enumerate(rows)))
     (res / "run.json").write_text(json.dumps({"git": {"sha": "abc"}}))
     ckpt = tmp_path / "ckpt"
     ckpt.mkdir()
@@ -34,7 +34,7 @@ def test_stamp_counts_successes_and_replaces_its_own_entry(tmp_path):
     assert len(meta["evaluation"]) == 1
     entry = meta["evaluation"][0]
     assert entry["success_episodes"] == {"0.1": [1, 2], "2.5": [1, 1]}
-    assert entry["git"] == "abc" and entry["env_id"] == "IMPACT/Hammer-v0"
+    assert entry["git"] == "abc" and entry["env_id"] == "IMPACT/Hammer-v1"
 
 
 def test_stamp_unknown_method_is_one_line(tmp_path, capsys):

@@ -17,10 +17,10 @@ WARM = MethodSpec("scripted_impact_warm_test", "impact", policy_part("scripted")
 
 
 def _config() -> SweepConfig:
-    spec = SweepSpec(env_id="IMPACT/Hammer-v0", methods=(WARM.name,), values=(0.2, 2.5),
+    spec = SweepSpec(env_id="IMPACT/Hammer-v1", methods=(WARM.name,), values=(0.2, 2.5),
                      episodes=2, seed=5)
     return SweepConfig(spec, RunOptions(out=Path("unused"), envs_per_worker=2),
-                       canonical_env_id="IMPACT/Hammer-v0", param_name="object_mass",
+                       canonical_env_id="IMPACT/Hammer-v1", param_name="object_mass",
                        policy_dt=1 / 30)
 
 

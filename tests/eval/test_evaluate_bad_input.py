@@ -150,7 +150,7 @@ def test_an_interrupted_evaluate_resumes_to_the_same_bytes(tmp_path: Path) -> No
         tmp_path / "full" / "episodes.csv").read_bytes()
 
 
-HAMMER = "IMPACT/Hammer-v0"
+HAMMER = "IMPACT/Hammer-v1"
 
 
 def _checkpoint(variant: str):

@@ -79,7 +79,7 @@ def test_a_composed_method_gives_its_shortcuts_rows(tmp_path: Path) -> None:
     """The acceptance, on the scripted expert (the DP version is the same code path): one
     sweep with both names; every column but ``method`` is equal, row by row."""
     out = tmp_path / "out"
-    assert main(["--env", "IMPACT/Hammer-v0", "--method",
+    assert main(["--env", "IMPACT/Hammer-v1", "--method",
                  "scripted_impact_paper,scripted+impact@paper", "--masses", "2.5",
                  "--episodes", "2", "--workers", "1", "--out", str(out)]) == 0
     rows = pd.read_csv(out / "episodes.csv", dtype=str, keep_default_na=False)

@@ -30,7 +30,7 @@ def _episodes() -> pd.DataFrame:
                 rows.append({"method": method, "param_value": value, "episode": episode,
                              "success": int(episode == 0 and value == 5.0),
                              **{c: big * (1 + 0.1 * i) for i, c in enumerate(COLUMNS)}})
-    return pd.DataFrame(rows).assign(env_id="IMPACT/Hammer-v0", param_name="object_mass")
+    return pd.DataFrame(rows).assign(env_id="IMPACT/Hammer-v1", param_name="object_mass")
 
 
 @pytest.mark.parametrize("column", COLUMNS)

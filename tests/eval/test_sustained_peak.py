@@ -143,7 +143,7 @@ def test_the_env_reports_the_mass_it_set_and_its_robot_profile() -> None:
 
     import impact_envs  # noqa: F401 - registers the envs
 
-    env = gym.make("IMPACT/Hammer-v0")
+    env = gym.make("IMPACT/Hammer-v1")
     try:
         _, info = env.reset(seed=0, options={"object_mass": 3.5})
         assert info["object_mass"] == 3.5 and info["robot_profile"] == "ideal"
@@ -159,7 +159,7 @@ def test_the_env_reports_the_mass_it_set_and_its_robot_profile() -> None:
 
 def _row(value: float, episode: int) -> dict[str, object]:
     row: dict[str, object] = dict.fromkeys(EPISODE_COLUMNS, 1.0)
-    row.update(method="impact", env_id="IMPACT/Hammer-v0", param_name="object_mass",
+    row.update(method="impact", env_id="IMPACT/Hammer-v1", param_name="object_mass",
                param_value=value, seed=episode, episode=episode, success=episode % 2,
                success_once=1, length=30, failure_reason="", robot_profile="ideal",
                drawn_mass_kg=value, peak_contact_force_n=900.0 + episode,

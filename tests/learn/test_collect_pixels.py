@@ -22,7 +22,7 @@ from impact_learn.dataset import (
     load_replay,
 )
 
-HAMMER = "IMPACT/Hammer-v0"
+HAMMER = "IMPACT/Hammer-v1"
 SMALL = ObservationOptions(obs_mode="rgb", cameras=("overview", "wrist"), image_width=32,
                            image_height=24, shadows=False)
 

@@ -1,7 +1,7 @@
 """End to end: collect demos with a scripted expert, train, roll the policy out.
 
 A tiny reach env with the IMPACT observation/action contract (fixtures/fake_reach.py) stands
-in for the MuJoCo envs; the same pipeline runs on IMPACT/Hammer-v0 when that env and its expert
+in for the MuJoCo envs; the same pipeline runs on IMPACT/Hammer-v1 when that env and its expert
 are importable.
 """
 
@@ -182,16 +182,16 @@ def _real_hammer_or_skip() -> None:
     try:
         from impact_envs.policies.experts import make_expert
 
-        make_expert("IMPACT/Hammer-v0")
-        gym.make("IMPACT/Hammer-v0", controller="impedance", object_mass=0.2).reset(seed=0)
+        make_expert("IMPACT/Hammer-v1")
+        gym.make("IMPACT/Hammer-v1", controller="impedance", object_mass=0.2).reset(seed=0)
     except Exception as exc:  # env or expert not available (yet)
-        pytest.skip(f"IMPACT/Hammer-v0 unavailable: {type(exc).__name__}: {exc}")
+        pytest.skip(f"IMPACT/Hammer-v1 unavailable: {type(exc).__name__}: {exc}")
 
 
 def test_real_hammer_pipeline(tmp_path):
     _real_hammer_or_skip()
     cfg = CollectConfig(
-        env_id="IMPACT/Hammer-v0",
+        env_id="IMPACT/Hammer-v1",
         out=str(tmp_path / "h.zarr"),
         episodes=1,
         param=0.2,
@@ -203,7 +203,7 @@ def test_real_hammer_pipeline(tmp_path):
     opts = RunOptions(steps=4, checkpoint_every=4, val_every=4, val_fraction=0.0, progress=False)
     train(CFG, tmp_path / "h.zarr", tmp_path / "run", opts)
     policy = DiffusionPolicy.load(tmp_path / "run" / "policy")
-    env = gym.make("IMPACT/Hammer-v0", controller="impedance", object_mass=0.2)
+    env = gym.make("IMPACT/Hammer-v1", controller="impedance", object_mass=0.2)
     obs, _ = env.reset(seed=5)
     policy.reset(1)
     for _ in range(10):
@@ -214,7 +214,7 @@ def test_env_factory_sets_the_envs_own_parameter(tmp_path):
     """--mass sets whatever the env sweeps (Calligraphy: tool_mass, not object_mass)."""
     from impact_learn.collect import default_env_factory
 
-    cfg = CollectConfig(env_id="IMPACT/Calligraphy-v0", out=str(tmp_path / "c.zarr"),
+    cfg = CollectConfig(env_id="IMPACT/Calligraphy-v1", out=str(tmp_path / "c.zarr"),
                         episodes=1, param=1.5, n_envs=1, progress=False)
     env = default_env_factory(cfg)()
     env.reset(seed=0)

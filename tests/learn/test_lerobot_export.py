@@ -43,7 +43,7 @@ def _frames(rng: np.random.Generator, n: int, h: int, w: int, shift: int) -> np.
 def _store(path: Path, images: bool, size: tuple[int, int] = (24, 32)) -> Path:
     rng = np.random.default_rng(0)
     dims: dict = dict(HAMMER_DIMS)
-    attrs = {"env_id": "IMPACT/Hammer-v0", "param_name": "object_mass"}
+    attrs = {"env_id": "IMPACT/Hammer-v1", "param_name": "object_mass"}
     if images:
         dims = {k: dims[k] for k in ROBOT}
         dims |= {f"{c}_rgb": ImageSpec((*size, 3), "uint8") for c in ("overview", "wrist")}

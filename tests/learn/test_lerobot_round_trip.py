@@ -48,7 +48,7 @@ def test_round_trip_trains_in_lerobot_and_evaluates_here(tmp_path) -> None:
     # observation dict exactly: the batch it feeds equals the export's parquet rows
     rows = pq.read_table(out / "lerobot_dataset" / "data" / "chunk-000" / "file-000.parquet")
     store = load_replay(out / "demos.zarr")
-    batch = observation_plan(PluginSettings(task="Hammer-v0")).policy_batch(store.data)
+    batch = observation_plan(PluginSettings(task="Hammer-v1")).policy_batch(store.data)
     assert set(batch) == {"observation.state", "observation.environment_state"}
     for name, values in batch.items():
         assert np.array_equal(np.stack(rows.column(name).to_numpy(zero_copy_only=False)), values)

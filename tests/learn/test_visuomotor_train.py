@@ -141,11 +141,11 @@ def test_checkpoint_refuses_other_cameras(store, tmp_path):
 
     train(CFG, store, tmp_path / "run", _opts(2))
     policy = DiffusionPolicy.load(tmp_path / "run" / "policy")
-    policy.meta["dataset"]["attrs"]["env_id"] = "IMPACT/Hammer-v0"
-    env = gym.make("IMPACT/Hammer-v0", observation=ObservationOptions(
+    policy.meta["dataset"]["attrs"]["env_id"] = "IMPACT/Hammer-v1"
+    env = gym.make("IMPACT/Hammer-v1", observation=ObservationOptions(
         obs_mode="rgb", cameras=("overview", "wrist"), image_width=SIZE, image_height=SIZE))
     try:
         with pytest.raises(CheckpointError, match="shadows=False"):
-            check_policy_env(policy, "IMPACT/Hammer-v0", env, "run")
+            check_policy_env(policy, "IMPACT/Hammer-v1", env, "run")
     finally:
         env.close()

@@ -72,7 +72,7 @@ def test_every_task_steps_with_lerobot_keys(task: str) -> None:
 def test_image_mode_gives_pixels_per_camera() -> None:
     settings = PluginSettings(obs_mode="rgb", cameras=("wrist", "overview"), image_width=32,
                               image_height=24, episode_length=STEPS)
-    env = make_lerobot_env("Hammer-v0", settings)
+    env = make_lerobot_env("Hammer-v1", settings)
     obs, _ = env.reset(seed=SEED)
     ours = _ours(settings, [])[0]
     assert set(obs) == {"agent_pos", "pixels"} and list(obs["pixels"]) == ["overview", "wrist"]
@@ -85,11 +85,11 @@ def test_image_mode_gives_pixels_per_camera() -> None:
 
 
 def test_fixed_mass_and_mass_bin() -> None:
-    fixed = make_lerobot_env("Calligraphy-v0", PluginSettings(task="Calligraphy-v0",
+    fixed = make_lerobot_env("Calligraphy-v1", PluginSettings(task="Calligraphy-v1",
                                                               object_mass=0.7))
     assert fixed.reset(seed=SEED)[1]["tool_mass"] == 0.7
     fixed.close()
-    binned = make_lerobot_env("Hammer-v0", PluginSettings(mass_bin=(1.0, 2.0)))
+    binned = make_lerobot_env("Hammer-v1", PluginSettings(mass_bin=(1.0, 2.0)))
     masses = [binned.reset(seed=s)[1]["object_mass"] for s in (5, 6, 5)]
     assert masses == [draw_in_bin(1.0, 2.0, s) for s in (5, 6, 5)]  # impact-eval's draw
     assert masses[0] != masses[1] and all(1.0 <= m < 2.0 for m in masses)
@@ -100,7 +100,7 @@ def test_fixed_mass_and_mass_bin() -> None:
 
 def test_settings_of_another_task_are_refused() -> None:
     with pytest.raises(InvalidArgumentError, match="valid: a PluginSettings with task="):
-        gym.make("gym_impact/Dumbbell-v0", settings=PluginSettings())
+        gym.make("gym_impact/Dumbbell-v1", settings=PluginSettings())
 
 
 def test_vectors_equal_the_export_of_the_same_steps(tmp_path) -> None:
@@ -109,7 +109,7 @@ def test_vectors_equal_the_export_of_the_same_steps(tmp_path) -> None:
     pq = pytest.importorskip("pyarrow.parquet")
     from impact_learn.lerobot_export import ExportConfig, export_lerobot
 
-    settings = PluginSettings(task="HammerBasket-v0", episode_length=STEPS)
+    settings = PluginSettings(task="HammerBasket-v1", episode_length=STEPS)
     env = make_lerobot_env(settings.task, settings)
     actions = _actions(env, STEPS + 1)
     plugin = [env.reset(seed=SEED)[0]] + [env.step(a)[0] for a in actions[:STEPS]]

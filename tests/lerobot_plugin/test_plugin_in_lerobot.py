@@ -42,7 +42,7 @@ def _lerobot_env(tmp_path: Path, args: list[str]) -> dict:
 def test_lerobot_makes_and_steps_the_default_env(tmp_path) -> None:
     seen = _lerobot_env(tmp_path, ["--env.episode_length=2"])
     assert (seen["config_class"], seen["type"], seen["gym_id"]) == (
-        "ImpactEnv", "impact", "gym_impact/Hammer-v0")
+        "ImpactEnv", "impact", "gym_impact/Hammer-v1")
     assert seen["features_map"] == {"agent_pos": "observation.state",
                                     "environment_state": "observation.environment_state",
                                     "action": "action"}
@@ -58,10 +58,10 @@ def test_lerobot_makes_and_steps_the_default_env(tmp_path) -> None:
 
 def test_lerobot_makes_an_image_env_with_a_mass_bin(tmp_path) -> None:
     seen = _lerobot_env(tmp_path, [
-        "--env.task=Dumbbell-v0", "--env.controller=impedance", "--env.mass_bin=[1.0, 2.5]",
+        "--env.task=Dumbbell-v1", "--env.controller=impedance", "--env.mass_bin=[1.0, 2.5]",
         "--env.obs_mode=state+rgb", "--env.cameras=[wrist]", "--env.image_width=32",
         "--env.image_height=24", "--env.episode_length=2"])
-    assert seen["gym_id"] == "gym_impact/Dumbbell-v0"
+    assert seen["gym_id"] == "gym_impact/Dumbbell-v1"
     assert "controller='impedance'" in seen["settings"]
     assert seen["policy_features"]["observation.images.wrist"] == [3, 24, 32]
     assert seen["lerobot_obs"][-1] == {"observation.state": [1, 24],
@@ -82,7 +82,7 @@ def test_lerobot_eval_runs_on_hammer(tmp_path) -> None:
     _run([PYTHON, str(CHECK), "policy", str(policy)])
     run = _run([str(Path(PYTHON).parent / "lerobot-eval"),
                 "--env.discover_packages_path=impact_lerobot", "--env.type=impact",
-                "--env.task=Hammer-v0", f"--env.episode_length={EVAL_STEPS}",
+                "--env.task=Hammer-v1", f"--env.episode_length={EVAL_STEPS}",
                 f"--policy.path={policy}", "--eval.n_episodes=1", "--eval.batch_size=1",
                 f"--output_dir={out}"])
     assert "'pc_success': " in run.stdout

@@ -34,7 +34,7 @@ def _two_envs(settings: PluginSettings) -> tuple[list[dict], list[dict]]:
 
 @pytest.mark.parametrize("obs_mode", ["state", "state+rgb"])
 def test_policy_batch_is_what_lerobot_eval_feeds(obs_mode: str) -> None:
-    settings = PluginSettings(task="Hammer-v0", obs_mode=obs_mode, image_width=32,
+    settings = PluginSettings(task="Hammer-v1", obs_mode=obs_mode, image_width=32,
                               image_height=24)
     plan = observation_plan(settings)
     ours, theirs = _two_envs(settings)
@@ -57,10 +57,10 @@ def test_policy_batch_is_what_lerobot_eval_feeds(obs_mode: str) -> None:
 @pytest.mark.skipif(HAS_LEROBOT, reason="LeRobot is installed: its absence cannot be tested")
 def test_lerobot_methods_without_lerobot_are_one_line(tmp_path) -> None:
     with pytest.raises(CheckpointError) as err:
-        load_lerobot_policy(tmp_path, "IMPACT/Hammer-v0")
+        load_lerobot_policy(tmp_path, "IMPACT/Hammer-v1")
     assert str(err.value) == LEROBOT_MISSING and "\n" not in str(err.value)
     for name in ("lerobot_dp", "lerobot_dp_impact"):
         spec = resolve_method(name)
         assert spec.controller == ("impedance" if name == "lerobot_dp" else "impact")
         with pytest.raises(CheckpointError):
-            spec.build("IMPACT/Hammer-v0", None)
+            spec.build("IMPACT/Hammer-v1", None)

@@ -27,16 +27,16 @@ def test_tasks_and_gym_ids_cover_every_registered_env() -> None:
 def test_defaults() -> None:
     s = PluginSettings()
     assert (s.task, s.controller, s.controller_preset, s.obs_mode) == (
-        "Hammer-v0", "impact", "default", "state")
+        "Hammer-v1", "impact", "default", "state")
     assert s.object_mass is None and s.mass_bin is None and s.episode_length is None
-    assert (s.env_id, s.gym_id, s.steps) == ("IMPACT/Hammer-v0", "gym_impact/Hammer-v0", 750)
-    assert PluginSettings(task="HammerBasket-v0", episode_length=40).steps == 40
+    assert (s.env_id, s.gym_id, s.steps) == ("IMPACT/Hammer-v1", "gym_impact/Hammer-v1", 750)
+    assert PluginSettings(task="HammerBasket-v1", episode_length=40).steps == 40
     assert OBS_MODES == ("state", "rgb", "state+rgb")
 
 
 @pytest.mark.parametrize(("fields", "valid"), [
-    ({"task": "Nail-v0"}, "valid choices: Hammer-v0, Dumbbell-v0, Calligraphy-v0, "
-                          "Disturbance-v0, HammerBasket-v0"),
+    ({"task": "Nail-v0"}, "valid choices: Hammer-v1, Dumbbell-v1, Calligraphy-v1, "
+                          "Disturbance-v1, HammerBasket-v1"),
     ({"controller": "pid"}, "valid choices: impedance, impact"),
     ({"controller_preset": "fast"}, "valid choices: default, paper, authors_sim, authors_real"),
     ({"obs_mode": "rgbd"}, "valid choices: state, rgb, state+rgb"),
@@ -45,7 +45,7 @@ def test_defaults() -> None:
     ({"mass_bin": (2.0, 1.0)}, "lo < hi"),
     ({"mass_bin": (1.0, 2.0, 3.0)}, "two numbers (lo, hi)"),
     ({"mass_bin": (0.01, 1.0)}, "valid: 0.05 to 12.0 kg"),
-    ({"task": "Calligraphy-v0", "mass_bin": (0.1, 9.0)}, "tool_mass=9.0 out of range"),
+    ({"task": "Calligraphy-v1", "mass_bin": (0.1, 9.0)}, "tool_mass=9.0 out of range"),
     ({"episode_length": 0}, "valid: an integer from 1 to 750"),
     ({"episode_length": 751}, "valid: an integer from 1 to 750"),
     ({"episode_length": True}, "valid: an integer from 1 to 750"),
@@ -64,9 +64,9 @@ def test_lists_from_a_command_line_become_tuples() -> None:
 
 
 @pytest.mark.parametrize(("task", "param"), [
-    ("Hammer-v0", "object_mass"), ("Dumbbell-v0", "object_mass"),
-    ("Calligraphy-v0", "tool_mass"), ("Disturbance-v0", "object_mass"),
-    ("HammerBasket-v0", "object_mass")])
+    ("Hammer-v1", "object_mass"), ("Dumbbell-v1", "object_mass"),
+    ("Calligraphy-v1", "tool_mass"), ("Disturbance-v1", "object_mass"),
+    ("HammerBasket-v1", "object_mass")])
 def test_the_mass_parameter_of_each_task(task: str, param: str) -> None:
     assert mass_param(task_class(f"IMPACT/{task}")).name == param
 
@@ -97,5 +97,5 @@ def test_image_modes_add_cameras_and_rgb_drops_privileged_entries() -> None:
     both = _features(obs_mode="state+rgb", cameras=("wrist",))
     assert list(both) == ["agent_pos", "environment_state", "pixels/wrist", "action"]
     # Calligraphy's goal is not privileged: it stays in the state in the rgb mode
-    callig = _features(task="Calligraphy-v0", obs_mode="rgb", cameras=("overview",))
+    callig = _features(task="Calligraphy-v1", obs_mode="rgb", cameras=("overview",))
     assert "goal_pos.0" in callig["agent_pos"][3] and "environment_state" not in callig

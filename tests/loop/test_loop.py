@@ -61,10 +61,10 @@ def test_closed_loop_equals_public_api_ticks_with_the_authors_presets(preset):
     joint limits, the rate limit with gravity) run the same in both, bit for bit."""
     runs = []
     for reference in (False, True):
-        env = gym.make("IMPACT/Hammer-v0", controller="impact", controller_preset=preset)
+        env = gym.make("IMPACT/Hammer-v1", controller="impact", controller_preset=preset)
         if reference:
             env.unwrapped.loop = _ReferenceLoop(env.unwrapped.loop)
-        runs.append(expert_rollout(env, "IMPACT/Hammer-v0", seed=5, steps=60))
+        runs.append(expert_rollout(env, "IMPACT/Hammer-v1", seed=5, steps=60))
     np.testing.assert_array_equal(runs[0], runs[1])
 
 
@@ -76,7 +76,7 @@ def test_a_task_declares_its_tick_hook():
 
 
 def test_loop_needs_a_reset_controller():
-    env = gym.make("IMPACT/Hammer-v0")
+    env = gym.make("IMPACT/Hammer-v1")
     loop = env.unwrapped.loop
     targets = TickTargets(np.zeros((2, 3)), np.tile([1.0, 0, 0, 0], (2, 1)), np.zeros((2, 21)),
                           -1.0, None, None)

@@ -16,6 +16,7 @@ from impact_control.errors import CheckpointError
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.policies.diffusion.compat import check_policy_env
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
+from impact_envs.versions import current_id, parse
 from impact_eval.methods import env_short_name
 
 ROOT = Path(impact_envs.__file__).parent / "checkpoints"
@@ -30,8 +31,9 @@ def test_shipped_checkpoints_fit_their_env(path: Path) -> None:
     """Each shipped checkpoint fits its env made as its demos were recorded (a visuomotor one
     with the store's cameras); a visuomotor checkpoint on a state env is one line."""
     policy = DiffusionPolicy.load(path)
-    env_id = policy.meta["dataset"]["attrs"]["env_id"]  # the env its demos were recorded on
-    assert env_short_name(env_id) == path.parent.name  # the folder impact-eval looks in
+    trained_on = policy.meta["dataset"]["attrs"]["env_id"]  # the env its demos came from
+    assert env_short_name(trained_on) == path.parent.name  # the folder impact-eval looks in
+    env_id = current_id(parse(trained_on)[0])  # its env's current version runs it
     recorded = policy.meta["dataset"]["attrs"].get("observation")
     kwargs = {}
     if recorded is not None:
@@ -44,8 +46,9 @@ def test_shipped_checkpoints_fit_their_env(path: Path) -> None:
 
 def test_checkpoint_of_another_task_is_refused() -> None:
     policy = DiffusionPolicy.load(ROOT / "calligraphy" / "vanilla")
-    with pytest.raises(CheckpointError, match="trained on IMPACT/Calligraphy-v0, not IMPACT/Ham"):
-        check_policy_env(policy, "IMPACT/Hammer-v0", gym.make("IMPACT/Hammer-v0"), "x")
+    with pytest.raises(CheckpointError, match="trained on IMPACT/Calligraphy-v0, which "
+                       "IMPACT/Hammer-v1 does not run"):
+        check_policy_env(policy, "IMPACT/Hammer-v1", gym.make("IMPACT/Hammer-v1"), "x")
 
 
 def test_nan_weights_are_refused(tmp_path: Path) -> None:
@@ -56,8 +59,8 @@ def test_nan_weights_are_refused(tmp_path: Path) -> None:
     tensors[first] = tensors[first] * float("nan")
     save_file(tensors, str(copy / "model.safetensors"))
     with pytest.raises(CheckpointError, match="non-finite weights"):
-        check_policy_env(DiffusionPolicy.load(copy), "IMPACT/Hammer-v0",
-                         gym.make("IMPACT/Hammer-v0"), str(copy))
+        check_policy_env(DiffusionPolicy.load(copy), "IMPACT/Hammer-v1",
+                         gym.make("IMPACT/Hammer-v1"), str(copy))
 
 
 def test_other_action_size_is_refused(tmp_path: Path) -> None:
@@ -67,5 +70,5 @@ def test_other_action_size_is_refused(tmp_path: Path) -> None:
     meta["action_dim"] = 7
     (copy / "meta.json").write_text(json.dumps(meta))
     with pytest.raises(CheckpointError, match="outputs 7 action values, the env takes 10"):
-        check_policy_env(DiffusionPolicy.load(copy), "IMPACT/Hammer-v0",
-                         gym.make("IMPACT/Hammer-v0"), str(copy))
+        check_policy_env(DiffusionPolicy.load(copy), "IMPACT/Hammer-v1",
+                         gym.make("IMPACT/Hammer-v1"), str(copy))

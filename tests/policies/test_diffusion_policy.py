@@ -195,13 +195,13 @@ def test_bench_prints_policy_cost_next_to_env_cost(capsys, monkeypatch):
     monkeypatch.setattr(bench, "measure_env_step", lambda env_id: real(env_id, steps=3))
     bench_main(["--batch", "4", "--cycles", "1"])
     out = capsys.readouterr().out
-    assert "IMPACT/Hammer-v0 env.step" in out and "policy cost / env cost:" in out
+    assert "IMPACT/Hammer-v1 env.step" in out and "policy cost / env cost:" in out
 
 
 def _shipped_policy() -> DiffusionPolicy:
     from impact_eval.methods import checkpoint_dir
 
-    return DiffusionPolicy.load(checkpoint_dir("IMPACT/Hammer-v0", "vanilla"))
+    return DiffusionPolicy.load(checkpoint_dir("IMPACT/Hammer-v1", "vanilla"))
 
 
 @pytest.mark.parametrize("batch,slot,threads", [(3, 2, 1), (5, 0, 2), (17, 9, 1)])

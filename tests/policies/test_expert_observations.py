@@ -22,8 +22,8 @@ def _batch(shapes: dict[str, tuple[int, ...]], n: int = 1) -> dict[str, np.ndarr
     return {k: np.zeros((n, *shape), np.float32) for k, shape in shapes.items()}
 
 
-ENV_IDS = ["IMPACT/Hammer-v0", "IMPACT/Dumbbell-v0", "IMPACT/Calligraphy-v0",
-           "IMPACT/Disturbance-v0"]
+ENV_IDS = ["IMPACT/Hammer-v1", "IMPACT/Dumbbell-v1", "IMPACT/Calligraphy-v1",
+           "IMPACT/Disturbance-v1"]
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
@@ -41,7 +41,7 @@ def test_an_image_mode_observation_names_the_missing_entries(env_id: str) -> Non
 
 @pytest.mark.parametrize("compensation", ["none", "closed_loop", "privileged"])
 def test_every_compensation_mode_checks(compensation: str) -> None:
-    expert = make_expert("IMPACT/Hammer-v0", compensation=compensation)
+    expert = make_expert("IMPACT/Hammer-v1", compensation=compensation)
     expert.reset(2, np.ones(2))
     with pytest.raises(InvalidArgumentError, match="object_rot6d"):
         expert.act(_batch({**ROBOT, **IMAGE}, 2))
@@ -62,7 +62,7 @@ MALFORMED = {
 @pytest.mark.parametrize("case", sorted(MALFORMED))
 def test_malformed_observations_are_one_line(case: str) -> None:
     obs, message = MALFORMED[case]
-    expert = make_expert("IMPACT/Dumbbell-v0")
+    expert = make_expert("IMPACT/Dumbbell-v1")
     expert.reset(1)
     with pytest.raises(InvalidArgumentError) as info:
         expert.act(obs)
@@ -71,9 +71,9 @@ def test_malformed_observations_are_one_line(case: str) -> None:
 
 def test_a_real_rgb_observation_and_a_state_rgb_one() -> None:
     """The issue's case on the env itself, and the mode that does work for an expert."""
-    env = gym.make("IMPACT/Hammer-v0", observation={"obs_mode": "rgb", "cameras": ["wrist"],
+    env = gym.make("IMPACT/Hammer-v1", observation={"obs_mode": "rgb", "cameras": ["wrist"],
                                                     "image_width": 16, "image_height": 16})
-    expert = make_expert("IMPACT/Hammer-v0")
+    expert = make_expert("IMPACT/Hammer-v1")
     try:
         obs, _ = env.reset(seed=3)
         expert.reset(1)

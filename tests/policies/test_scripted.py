@@ -24,7 +24,7 @@ def _carry_obs(goal: np.ndarray, carry_z: float) -> dict[str, np.ndarray]:
 
 @pytest.mark.parametrize("dwell", [0, 7])
 def test_carry_ends_after_the_dwell_at_the_waypoint(dwell):
-    expert = make_expert("IMPACT/Dumbbell-v0")
+    expert = make_expert("IMPACT/Dumbbell-v1")
     expert.spec = replace(expert.spec, carry_dwell_steps=dwell)
     expert.reset(1)
     goal = np.array([0.35, -0.17, 0.0])
@@ -43,14 +43,14 @@ def test_carry_ends_after_the_dwell_at_the_waypoint(dwell):
 
 
 def test_dwell_extends_the_carry_timeout():
-    spec = replace(make_expert("IMPACT/Dumbbell-v0").spec, carry_dwell_steps=90)
+    spec = replace(make_expert("IMPACT/Dumbbell-v1").spec, carry_dwell_steps=90)
     assert spec.timeout_steps(CARRY) == spec.timeouts_steps[CARRY] + 90
     assert spec.timeout_steps(LOWER) == spec.timeouts_steps[LOWER]
 
 
 def test_protocol_expert_validates_env_and_hold():
-    assert protocol_expert("IMPACT/Hammer-v0", 2.0).spec.carry_dwell_steps == 60
-    with pytest.raises(InvalidArgumentError, match="valid: IMPACT/Dumbbell-v0"):
-        protocol_expert("IMPACT/Disturbance-v0", 1.0)
+    assert protocol_expert("IMPACT/Hammer-v1", 2.0).spec.carry_dwell_steps == 60
+    with pytest.raises(InvalidArgumentError, match="valid: IMPACT/Dumbbell-v1"):
+        protocol_expert("IMPACT/Disturbance-v1", 1.0)
     with pytest.raises(InvalidArgumentError, match="--hold-s must be >= 0"):
-        protocol_expert("IMPACT/Dumbbell-v0", -1.0)
+        protocol_expert("IMPACT/Dumbbell-v1", -1.0)

@@ -98,7 +98,7 @@ def test_offsets_drift_as_a_random_walk() -> None:
 def test_a_lost_command_leaves_the_last_torque_on_the_drives() -> None:
     """Half the commands lost: every lost tick applies exactly the torque of the tick before,
     and the share of repeated ticks is about the loss rate."""
-    env = gym.make("IMPACT/Hammer-v0", robot=RobotOptions(command_loss_rate=0.5,
+    env = gym.make("IMPACT/Hammer-v1", robot=RobotOptions(command_loss_rate=0.5,
                                                           sensor_noise=False))
     env.reset(seed=0)
     u = env.unwrapped

@@ -25,7 +25,7 @@ FORCE_N = np.array([10.0, -6.0, 15.0])
 
 
 def _env(reading: str, **kwargs: Any) -> Any:
-    return gym.make("IMPACT/Hammer-v0", robot={"torque_reading": reading}, **kwargs).unwrapped
+    return gym.make("IMPACT/Hammer-v1", robot={"torque_reading": reading}, **kwargs).unwrapped
 
 
 def _hold(obs: dict[str, np.ndarray]) -> np.ndarray:
@@ -46,9 +46,9 @@ def test_a_bad_reading_is_one_line_naming_both_choices(value: object) -> None:
 
 def test_gym_make_takes_the_reading_in_a_dict() -> None:
     assert _env("commanded").sim.torque_reading == "commanded"
-    assert gym.make("IMPACT/Hammer-v0").unwrapped.sim.torque_reading == "link_side"
+    assert gym.make("IMPACT/Hammer-v1").unwrapped.sim.torque_reading == "link_side"
     with pytest.raises(InvalidArgumentError, match="valid choices: link_side, commanded"):
-        gym.make("IMPACT/Hammer-v0", robot={"torque_reading": "sensor"})
+        gym.make("IMPACT/Hammer-v1", robot={"torque_reading": "sensor"})
 
 
 def _known_commands(env: Any, seed: int) -> list[tuple[np.ndarray, ...]]:
@@ -89,7 +89,7 @@ def test_commanded_reading_is_the_applied_torque_exactly() -> None:
 
 
 def test_link_side_reading_adds_damping_friction_bias_and_noise() -> None:
-    env = gym.make("IMPACT/Hammer-v0").unwrapped
+    env = gym.make("IMPACT/Hammer-v1").unwrapped
     bias = None
     for _, _, _, tau, z, _, actuator, damper, friction in _known_commands(env, 3):
         bias = env.sim.state_arrays()["tau_bias"]
@@ -205,7 +205,7 @@ def test_joint_friction_of_a_moving_arm_shows_only_in_the_commanded_estimate() -
 
 
 def test_a_state_of_the_other_reading_is_refused() -> None:
-    source, target = _env("commanded"), gym.make("IMPACT/Hammer-v0").unwrapped
+    source, target = _env("commanded"), gym.make("IMPACT/Hammer-v1").unwrapped
     source.reset(seed=2)
     target.reset(seed=2)
     with pytest.raises(InvalidArgumentError, match="torque_reading"):

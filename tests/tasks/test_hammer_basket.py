@@ -1,4 +1,4 @@
-"""``IMPACT/HammerBasket-v0`` (issue 38): the authors' scene facts, their spawn ranges and
+"""``IMPACT/HammerBasket-v1`` (issue 38): the authors' scene facts, their spawn ranges and
 success test, the 60 s episode that success does not end, their 200 N hand, and the expert."""
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from impact_envs.tasks.hammer_basket import (
     HammerBasketTask,
 )
 
-ENV_ID = "IMPACT/HammerBasket-v0"
+ENV_ID = "IMPACT/HammerBasket-v1"
 
 
 @pytest.fixture(scope="module")
@@ -142,7 +142,7 @@ def test_the_hand_is_theirs_unless_named() -> None:
     with pytest.raises(InvalidArgumentError, match=r"^invalid grasp_force_n 210.*200 N"):
         RobotOptions(grasp_force_n=210.0)
     with pytest.raises(InvalidArgumentError, match=r"^invalid grasp_force_n 150.*140 N"):
-        gym.make("IMPACT/Hammer-v0", robot=RobotOptions(grasp_force_n=150.0))
+        gym.make("IMPACT/Hammer-v1", robot=RobotOptions(grasp_force_n=150.0))
     with pytest.raises(InvalidArgumentError, match=r"^invalid hand 'other'; valid choices"):
         RobotOptions(hand="other")
 

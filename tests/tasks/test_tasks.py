@@ -42,7 +42,7 @@ def _run(env: gym.Env, expert, obs: dict, steps: int, stop=lambda info: False) -
 
 # ---------------------------------------------------------------------------- dumbbell
 def test_dumbbell_resting_on_pad_is_success_and_off_pad_is_not():
-    env = gym.make("IMPACT/Dumbbell-v0").unwrapped
+    env = gym.make("IMPACT/Dumbbell-v1").unwrapped
     env.reset(seed=0)
     task, sim = env.task, env.sim
     pad = sim.model.body_pos[task.pad]
@@ -58,9 +58,9 @@ def test_dumbbell_resting_on_pad_is_success_and_off_pad_is_not():
 
 @pytest.mark.parametrize("controller", ["impact", "impedance"])
 def test_dumbbell_expert_places_2_5kg(controller):
-    env = gym.make("IMPACT/Dumbbell-v0", controller=controller)
+    env = gym.make("IMPACT/Dumbbell-v1", controller=controller)
     obs, _ = env.reset(seed=0)
-    expert = make_expert("IMPACT/Dumbbell-v0")
+    expert = make_expert("IMPACT/Dumbbell-v1")
     expert.reset(1)
     info = _run(env, expert, obs, 750, stop=lambda i: i["is_success"])
     assert info["is_success"] and info["object_mass"] == 2.5
@@ -110,7 +110,7 @@ def test_normal_force_command_ramps_and_masks_the_force_axes():
 
 
 def test_calligraphy_force_command_follows_the_commanded_tip():
-    env = gym.make("IMPACT/Calligraphy-v0").unwrapped
+    env = gym.make("IMPACT/Calligraphy-v1").unwrapped
     env.reset(seed=0)
     task, sim = env.task, env.sim
     tip = sim.data.site_xpos[task.tip_site]
@@ -130,9 +130,9 @@ def test_calligraphy_force_command_follows_the_commanded_tip():
 
 
 def _write(controller: str, tool_mass: float, seed: int) -> tuple[dict, np.ndarray]:
-    env = gym.make("IMPACT/Calligraphy-v0", controller=controller)
+    env = gym.make("IMPACT/Calligraphy-v1", controller=controller)
     obs, _ = env.reset(seed=seed, options={"tool_mass": tool_mass})
-    expert = make_expert("IMPACT/Calligraphy-v0")
+    expert = make_expert("IMPACT/Calligraphy-v1")
     expert.reset(1)
     forces, info = [], {}
     while not info.get("writing_done", False):
@@ -171,7 +171,7 @@ def test_calligraphy_expert_writes_at_nominal_tool_mass(controller):
 
 
 def test_surface_friction_option_sets_paper_friction():
-    env = gym.make("IMPACT/Calligraphy-v0").unwrapped
+    env = gym.make("IMPACT/Calligraphy-v1").unwrapped
     env.reset(seed=0, options={"surface_friction": 0.9})
     assert env.sim.model.geom_friction[env.task.paper_geom, 0] == 0.9
     env.close()
@@ -193,10 +193,10 @@ def test_disturbance_profiles():
 
 
 def test_disturbance_applied_force_and_load_change_follow_the_profile():
-    env = gym.make("IMPACT/Disturbance-v0", controller="impact").unwrapped
+    env = gym.make("IMPACT/Disturbance-v1", controller="impact").unwrapped
     obs, _ = env.reset(seed=0, options={"disturbance_n": 10.0, "added_mass": 0.5})
     task, sim = env.task, env.sim
-    expert = make_expert("IMPACT/Disturbance-v0")
+    expert = make_expert("IMPACT/Disturbance-v1")
     expert.reset(1)
     assert task.profile.kind == "step"
     nominal_inertia = sim.model.body_inertia[task.body].copy()
@@ -220,10 +220,10 @@ def test_disturbance_applied_force_and_load_change_follow_the_profile():
 
 def test_disturbance_stops_pushing_a_dropped_trough():
     """A 40 N push acts on the held trough only; dropping it ends the push (no fling)."""
-    env = gym.make("IMPACT/Disturbance-v0", controller="impact").unwrapped
+    env = gym.make("IMPACT/Disturbance-v1", controller="impact").unwrapped
     obs, _ = env.reset(seed=0, options={"disturbance_n": 40.0})
     task, sim = env.task, env.sim
-    expert = make_expert("IMPACT/Disturbance-v0")
+    expert = make_expert("IMPACT/Disturbance-v1")
     expert.reset(1)
     for _ in range(400):
         action = expert.act(stack_obs([obs]))[0]
@@ -245,9 +245,9 @@ def test_disturbance_stops_pushing_a_dropped_trough():
                          [("impact", 2.0, True), ("impedance", 2.0, True),
                           ("impact", 30.0, True), ("impedance", 30.0, False)])
 def test_disturbance_expert_holds_goal(controller, magnitude, success):
-    env = gym.make("IMPACT/Disturbance-v0", controller=controller)
+    env = gym.make("IMPACT/Disturbance-v1", controller=controller)
     obs, _ = env.reset(seed=3, options={"disturbance_n": magnitude})
-    expert = make_expert("IMPACT/Disturbance-v0")
+    expert = make_expert("IMPACT/Disturbance-v1")
     expert.reset(1)
     info = _run(env, expert, obs, 540, stop=lambda i: i["is_success"])
     assert info["is_success"] is success

@@ -15,10 +15,11 @@ import torch
 
 from impact_control.errors import CheckpointError
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
+from impact_envs.versions import runs_checkpoint_of
 
 
 def _bare_id(env_id: str) -> str:
-    """``"mod:IMPACT/Hammer-v0"`` -> ``"IMPACT/Hammer-v0"``."""
+    """``"mod:IMPACT/Hammer-v1"`` -> ``"IMPACT/Hammer-v1"``."""
     return env_id.rsplit(":", 1)[-1]
 
 
@@ -35,9 +36,10 @@ def check_policy_env(policy: DiffusionPolicy, env_id: str, env: gym.Env, where: 
     if not all(torch.isfinite(t).all() for t in tensors if t.is_floating_point()):
         raise CheckpointError(f"checkpoint {where} holds non-finite weights (NaN/inf)")
     trained = trained_env_id(policy)
-    if trained is not None and _bare_id(trained) != _bare_id(env_id):
+    if trained is not None and not runs_checkpoint_of(_bare_id(env_id), _bare_id(trained)):
         raise CheckpointError(
-            f"checkpoint {where} was trained on {trained}, not {_bare_id(env_id)}")
+            f"checkpoint {where} was trained on {trained}, which {_bare_id(env_id)} does not "
+            "run (impact_envs/versions.py: checkpoints_from)")
     spaces = getattr(env.observation_space, "spaces", {})
     for key, dim in policy.obs_dims.items():
         if key not in spaces:
