@@ -8,8 +8,9 @@ For every manifest table whose entry names the current env version, the committe
 ``episodes.csv`` at ``REV`` (the last commit before the rerun) and the current one are paired
 by (method, value, episode): rows missing on either side, episodes whose ``success`` or
 ``success_once`` differ, and each method's successes before and after. ``-v1`` is the last
-``-v0``'s behaviour, so flips come only from the CPU (the tables were recorded on avx2 or
-other Intel machines, the rerun on whatever runs it; docs/results.md, "Reproducibility").
+``-v0``'s behaviour, so flips come only from the CPU: the report's last column names the CPU
+each side was recorded on (the manifest's ``cpu``; docs/results.md, "Reproducibility").
+A ``--before`` git cannot read is one line naming the file it could not read there.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import subprocess
 from collections import Counter
 from pathlib import Path
 
+from impact_control.errors import InvalidArgumentError
 from impact_eval.experiments.rerun_tables import RESULTS, is_current
 
 OUTCOMES = ("success", "success_once")
@@ -56,8 +58,17 @@ def table_flips(before: str, after: str) -> dict:
 
 
 def _git_show(results: Path, rev: str, path: str) -> str:
-    return subprocess.run(["git", "show", f"{rev}:{path}"], capture_output=True, text=True,
-                          check=True, cwd=results.parent).stdout
+    """``path`` at ``rev`` in the repository holding ``results``.
+
+    Raises:
+        InvalidArgumentError: git cannot read it (unknown revision, no such file there).
+    """
+    done = subprocess.run(["git", "show", f"{rev}:{path}"], capture_output=True, text=True,
+                          cwd=results.parent)
+    if done.returncode != 0:
+        reason = (done.stderr.strip().splitlines() or ["git show failed"])[-1]
+        raise InvalidArgumentError(f"cannot read {path} at --before {rev}: {reason}")
+    return done.stdout
 
 
 def _cpu(entry: dict) -> str:
@@ -113,7 +124,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--cells", action="store_true",
                    help="list the cells whose successes moved instead")
     a = p.parse_args(argv)
-    text = (cells_report if a.cells else report)(a.results, a.before)
+    try:
+        text = (cells_report if a.cells else report)(a.results, a.before)
+    except InvalidArgumentError as exc:
+        p.error(str(exc))
     print(text, end="")
     if a.out:
         a.out.write_text(text)
