@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
+import threading
+from collections.abc import Callable, Iterator
 from typing import NoReturn
 
 
@@ -16,3 +20,18 @@ class OneLineParser(argparse.ArgumentParser):
     def fail(self, message: object) -> NoReturn:
         """Exit 2 with one line naming what is wrong (a refused value, not a usage error)."""
         self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+@contextlib.contextmanager
+def signal_handler(signum: int, handler: Callable[[int, object], object]) -> Iterator[None]:
+    """``handler`` for ``signum`` while the block runs, the previous handler back afterwards.
+    Python installs handlers from the main thread only: elsewhere the block runs with the
+    handlers as they were."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signum, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signum, previous)

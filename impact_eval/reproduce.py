@@ -26,11 +26,11 @@ import argparse
 import shutil
 import signal
 import tempfile
-import threading
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
+from impact_control.cli import signal_handler
 from impact_control.errors import InvalidArgumentError
 from impact_control.runinfo import cpu_info
 from impact_eval.csvio import encode_rows, file_columns, older_columns_missing, read_rows, row_key
@@ -267,14 +267,8 @@ def _terminated(signum: int, frame: object) -> None:
 @contextmanager
 def sigterm_unwinds() -> Iterator[None]:
     """SIGTERM (``timeout``, CI) raises SystemExit, so the rerun's folders are removed."""
-    if threading.current_thread() is not threading.main_thread():
+    with signal_handler(signal.SIGTERM, _terminated):
         yield
-        return
-    previous = signal.signal(signal.SIGTERM, _terminated)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 def main(argv: Sequence[str]) -> int:

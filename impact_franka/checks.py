@@ -2,15 +2,18 @@
 and exit 2, and nothing is created, changed or left behind.
 
 Each value is checked where argparse reads it (``number``, ``host``, ``pose_name``: a finite
-number in its range, a non-empty address, a pose name); what depends on several flags or on
-files is checked by ``check_args`` after parsing (``--step-at-s`` with ``--step-m`` and within
-``--seconds``, the ``--poses`` file, the pick and place poses in the workspace, ``--out``).
+number in its range, a host name or IP address without a port, a pose name); what depends on
+several flags or on files is checked by ``check_args`` after parsing (``--step-at-s`` with
+``--step-m`` and within ``--seconds``, the ``--poses`` file, the pick and place poses in the
+workspace, ``--out``).
 Both raise ``InvalidArgumentError``, which the CLI turns into exit 2.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import ipaddress
 import math
 import os
 import re
@@ -23,8 +26,10 @@ from impact_franka.pick_place import Pose
 MAX_SECONDS = 600.0
 """Longest run [s]: every 1 ms tick is kept in memory until the run ends (measured 600 B
 per tick as Python rows, 0.36 GB at 600 s), then written to ticks.csv."""
-_HOST = re.compile(r"[A-Za-z0-9:\[][A-Za-z0-9.:%_\[\]-]{0,252}")
-"""A host name, an IPv4 or an IPv6 address (no spaces, no leading ``-`` or ``.``)."""
+_LABEL = re.compile(r"[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?")
+"""One label of a host name (RFC 1123: letters, digits, inner hyphens, up to 63)."""
+HOST_VALID = ("valid: a host name, an IPv4 or an IPv6 address, without a port (the FCI's "
+              "ports are fixed), e.g. 172.16.0.2")
 
 
 def number(low: float, high: float, low_open: bool = False) -> Callable[[str], float]:
@@ -46,11 +51,28 @@ def number(low: float, high: float, low_open: bool = False) -> Callable[[str], f
 
 
 def host(text: str) -> str:
-    """An argparse ``type``: the robot's (or hand's) address, not empty."""
-    if not _HOST.fullmatch(text):
-        raise argparse.ArgumentTypeError(f"invalid address {text!r}; valid: a host name or IP "
-                                         "address, e.g. 172.16.0.2")
+    """An argparse ``type``: the robot's (or hand's) address, a host name or an IP address
+    (``is_host``); an address with a port, brackets or spaces is refused."""
+    if not is_host(text):
+        port = re.fullmatch(r"\[?(.+?)\]?:[0-9]+", text)
+        hint = " (a port is not part of it)" if port and is_host(port.group(1)) else ""
+        raise argparse.ArgumentTypeError(f"invalid address {text!r}{hint}; {HOST_VALID}")
     return text
+
+
+def is_host(text: str) -> bool:
+    """Whether ``text`` is an IPv4 address, an IPv6 address (a ``%zone`` allowed, no brackets)
+    or a host name (dot-separated RFC 1123 labels, at most 253 characters, a trailing dot
+    allowed; all-numeric labels only as an IPv4 address, so ``172.16.0`` is not one)."""
+    try:
+        ipaddress.ip_address(text)
+        return True
+    except ValueError:
+        pass
+    labels = text[:-1].split(".") if text.endswith(".") else text.split(".")
+    if not text or len(text) > 253 or not all(_LABEL.fullmatch(label) for label in labels):
+        return False
+    return not all(label.isdigit() for label in labels)
 
 
 def path(text: str) -> Path:
@@ -119,10 +141,12 @@ def _check_pick_place(args: argparse.Namespace) -> dict[str, Pose]:
 
 
 def check_out(out: Path) -> None:
-    """``--out`` is a new or empty directory that can be created: ``InvalidArgumentError``
+    """``--out`` is a new or empty directory that can be written: ``InvalidArgumentError``
     for a file, a directory that holds anything (an earlier run: never mixed or overwritten)
-    or a place that cannot be written. Nothing is created here (write_outputs does, after
-    the run), so a refused or failed command leaves nothing behind."""
+    or a place where the folder or a file in it cannot be created. Tried, not inferred from
+    permission bits (root passes those everywhere, ``/proc`` included): the folder and a probe
+    file are created, then removed, so a refused or failed command leaves nothing behind
+    (write_outputs creates the folder again after the run)."""
     valid = "valid: a new or empty directory in a writable place"
     if out.exists():
         if not out.is_dir():
@@ -134,12 +158,27 @@ def check_out(out: Path) -> None:
         if held:
             raise InvalidArgumentError(f"invalid --out {out}: it already holds files (an earlier "
                                        f"run?); {valid}")
-        if not os.access(out, os.W_OK | os.X_OK):
-            raise InvalidArgumentError(f"invalid --out {out}: not writable; {valid}")
-        return
-    parent = out.absolute().parent
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
-        raise InvalidArgumentError(f"invalid --out {out}: {parent} is not a writable directory; "
-                                   f"{valid}")
+    try:
+        _try_writing(out)
+    except OSError as exc:
+        where = exc.filename or out
+        raise InvalidArgumentError(f"invalid --out {out}: cannot create {where} "
+                                   f"({exc.strerror or exc}); {valid}") from None
+
+
+def _try_writing(out: Path) -> None:
+    """Create ``out`` (with its missing parents) and a file in it, then remove all of it."""
+    absolute = out.absolute()
+    missing = [p for p in (absolute, *absolute.parents) if not p.exists()]
+    created: list[Path] = []
+    try:
+        for folder in reversed(missing):
+            folder.mkdir()
+            created.append(folder)
+        probe = absolute / f".impact-robot-probe-{os.getpid()}"
+        probe.open("x").close()
+        probe.unlink()
+    finally:
+        for folder in reversed(created):
+            with contextlib.suppress(OSError):
+                folder.rmdir()

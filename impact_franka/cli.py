@@ -21,22 +21,25 @@
 
 Every argument is checked before anything connects (checks.py): each number finite and in
 its range, the pose file readable (pick-place) or writable (teach), every pose in the FR3's
-workspace (poses.check_workspace), ``--out`` new or empty. Then the command takes the
+workspace (poses.check_workspace), ``--host`` a host name or IP address without a port,
+``--out`` new or empty and writable (tried: created and removed). Then the command takes the
 one-client lock for the robot (connection.py), gives up on a robot that does not answer
 within ``--connect-timeout-s`` (10 s), sets the collision thresholds for ``--max-payload-kg``
 (collision.py) and refuses to start while the robot reports errors unless ``--recover``
 (libfranka's automatic error recovery). Exit 0 after a clean finish; 2 with one line on a bad
 argument (nothing connected, nothing written); 1 with one line naming the robot's errors, the
-failed step or why the robot could not be reached otherwise. A real robot needs a real-time
-kernel (``--realtime enforce``).
+failed step or why the robot could not be reached otherwise; 130 / 143 with one line on
+Ctrl-C / SIGTERM outside the control loop (a probe's child is ended before the lock is
+released). A real robot needs a real-time kernel (``--realtime enforce``).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 
-from impact_control.cli import OneLineParser
+from impact_control.cli import OneLineParser, signal_handler
 from impact_control.controller import CONTROLLERS
 from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_control.presets import ROBOT_PRESETS, check_robot_preset
@@ -170,23 +173,35 @@ def _add_pick_place_arguments(p: argparse.ArgumentParser) -> None:
                    help="squeeze force [N], 1 to 140")
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM outside the control loop, raised like Ctrl-C's ``KeyboardInterrupt`` so that
+    what the command started (the connection probe's child) ends and the one-client lock is
+    released on the way out, in that order (the loop itself handles both signals: runner.py)."""
+
+
+def _raise_terminated(signum: int, frame: object) -> None:
+    raise Terminated
+
+
 def main(argv: list[str] | None = None) -> int:
     """``impact-robot``: exit 0 done, 1 the robot stopped, refused or was not reached, 2 a bad
-    argument (argparse's own errors, and ``InvalidArgumentError`` from checks.py), each with
-    one line on stderr."""
+    argument (argparse's own errors, and ``InvalidArgumentError`` from checks.py), 130 / 143
+    Ctrl-C / SIGTERM outside the control loop, each with one line on stderr."""
     args = _parser().parse_args(argv)
     try:
-        return run(args)
+        with signal_handler(signal.SIGTERM, _raise_terminated):
+            return run(args)
     except InvalidArgumentError as exc:
         print(f"impact-robot: {exc}", file=sys.stderr)
         return 2
     except ImpactError as exc:
         print(f"impact-robot: {exc}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print("impact-robot: interrupted outside the control loop (no torque command was "
-              "running)", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        term = isinstance(exc, Terminated)
+        print(f"impact-robot: {'terminated (SIGTERM)' if term else 'interrupted'} outside the "
+              "control loop (no torque command was running)", file=sys.stderr)
+        return 128 + (signal.SIGTERM if term else signal.SIGINT)
 
 
 if __name__ == "__main__":

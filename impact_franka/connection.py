@@ -98,22 +98,37 @@ def client_lock(host: str) -> Iterator[None]:
         lock.close()
 
 
-def probe(host: str, timeout_s: float, program: str = PROBE) -> None:
-    """Connect to ``host`` and read one state in a child process; ``FrankaError`` (one line)
-    if it fails or takes longer than ``timeout_s`` (the child is then killed and reaped)."""
-    proc = subprocess.Popen([sys.executable, "-c", program, host], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+def probe(host: str, timeout_s: float, program: str | None = None) -> None:
+    """Connect to ``host`` and read one state in a child process (``program``, default
+    ``PROBE``); ``FrankaError`` (one line) if it fails or takes longer than ``timeout_s``.
+    However the wait ends (the timeout, Ctrl-C, SIGTERM made an exception by cli.py), a child
+    still running is killed and reaped before this returns, so before the lock is released."""
+    proc = subprocess.Popen([sys.executable, "-c", program or PROBE, host],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            stdin=subprocess.DEVNULL, text=True)
     try:
         out, err = proc.communicate(timeout=timeout_s)
     except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.communicate()
         raise FrankaError(f"cannot connect to {host}: no answer within {timeout_s:g} s "
                           "(--connect-timeout-s); valid: the robot's FCI address, FCI "
                           "activated in Desk") from None
+    finally:
+        _end(proc)
     if proc.returncode != 0:
         lines = (out.strip() or err.strip() or f"exit status {proc.returncode}").splitlines()
         raise FrankaError(f"cannot connect to {host}: {lines[-1]}")
+
+
+def _end(proc: subprocess.Popen) -> None:
+    """Kill ``proc`` if it still runs and reap it (a second interrupt does not stop this)."""
+    if proc.poll() is None:
+        proc.kill()
+    while proc.returncode is None:
+        with contextlib.suppress(KeyboardInterrupt):
+            proc.wait()
+    for pipe in (proc.stdout, proc.stderr):
+        if pipe is not None:
+            pipe.close()
 
 
 def connect(args: argparse.Namespace) -> tuple[object, object]:

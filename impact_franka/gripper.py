@@ -92,7 +92,12 @@ class GripperProcess:
         self._conn, child = ctx.Pipe()
         self._proc = ctx.Process(target=_child, args=(child, self.host), daemon=True)
         self._proc.start()
-        answered = self._conn.poll(timeout_s)
+        try:
+            answered = self._conn.poll(timeout_s)
+        except KeyboardInterrupt:  # Ctrl-C, or SIGTERM (cli.Terminated): the child ends first
+            self._proc.kill()
+            self.close()
+            raise
         reply = self._conn.recv() if answered else ("error", f"no answer within {timeout_s:g} s")
         if reply[0] != "ready":
             if not answered:

@@ -4,6 +4,8 @@ connected, created or changed. No simulator and no pylibfranka needed (192.0.2.1
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from robot_cli import assert_refused, no_connect, pose, run_cli, write_poses
 
@@ -186,3 +188,64 @@ def test_help_describes_each_command_and_names_the_choices(capsys) -> None:
             assert "controller configuration: default (what we ship)" in text
             assert "paper (the paper's table read literally)" in text
     assert code == 0
+
+
+@pytest.mark.parametrize("address", [
+    "127.0.0.1:1337", "172.16.0.2:80", "[::1]:1337", "robot.lab:1337", "localhost:0",
+])
+def test_an_address_with_a_port_is_refused(address, monkeypatch, capsys) -> None:
+    """The FCI's ports are fixed: ``HOST:PORT`` was accepted and failed at connect (exit 1)."""
+    no_connect(monkeypatch)
+    for argv in (["check", "--host", address], [*PICK_PLACE, "--gripper-host", address]):
+        assert_refused(*run_cli(argv, capsys), f"invalid address {address!r} (a port is not "
+                       "part of it); valid: a host name, an IPv4 or an IPv6 address")
+
+
+@pytest.mark.parametrize("address", [
+    "[::1]", "256.1.1.1", "172.16.0", "1.2.3.4.5", "http://172.16.0.2", "robot_1", "a..b",
+    "-robot", "robot-", "172.16.0.2/24", "fe80::1::2", "x" * 64 + ".lab",
+])
+def test_what_is_no_host_name_or_address_is_refused(address, monkeypatch, capsys) -> None:
+    no_connect(monkeypatch)
+    code, err = run_cli(["hold", f"--host={address}"], capsys)
+    assert_refused(code, err, "valid: a host name, an IPv4 or an IPv6 address")
+    assert "a port is not part of it" not in err
+
+
+@pytest.mark.parametrize("address", [
+    "172.16.0.2", "127.0.0.1", "::1", "fe80::1%eth0", "2001:db8::7", "localhost", "fr3",
+    "fr3-arm.lab.example", "fr3.lab.", "robot1",
+])
+def test_host_names_and_ip_addresses_get_past_the_checks(address, monkeypatch, capsys) -> None:
+    no_connect(monkeypatch)
+    code, err = run_cli(["check", "--host", address], capsys)
+    assert code == 1 and "CONNECT CALLED" in err
+
+
+def _empty_proc_folder() -> str | None:
+    """An existing empty folder under /proc (where no file can be created), if any."""
+    for folder in sorted(Path("/proc/fs").glob("*")) + sorted(Path("/proc/irq").glob("*/*")):
+        try:
+            if folder.is_dir() and not any(folder.iterdir()):
+                return str(folder)
+        except OSError:
+            continue
+    return None
+
+
+@pytest.mark.parametrize("out", ["/proc/impact-run", "/proc/a/b/run", "/proc/self/run",
+                                 "/proc/self/status/run", "/sys/impact-run",
+                                 "empty_proc_folder"])
+def test_out_where_nothing_can_be_created_is_refused_before_connecting(out, monkeypatch,
+                                                                         capsys) -> None:
+    """Permission bits let root write anywhere, /proc too: the folder and a file in it are
+    tried, so the refusal comes before the robot is held, not after the run."""
+    if not Path("/proc/self").is_dir():
+        pytest.skip("no /proc")
+    if out == "empty_proc_folder":
+        out = _empty_proc_folder() or pytest.skip("no empty folder under /proc")
+    no_connect(monkeypatch)
+    for command in (["hold", *HOST], PICK_PLACE):
+        assert_refused(*run_cli([*command, "--out", out], capsys), f"invalid --out {out}: "
+                       "cannot create")
+

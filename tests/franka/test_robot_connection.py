@@ -201,3 +201,97 @@ def test_sigterm_to_a_lock_holder_frees_the_lock(tmp_path) -> None:
     holder.wait(timeout=10)
     with client_lock("127.0.0.1"):
         pass
+
+
+STUCK_PROBE = """
+import os, signal, sys, time
+signal.signal(signal.SIGINT, signal.SIG_IGN)  # as pylibfranka's connect, which holds the GIL
+signal.signal(signal.SIGTERM, signal.SIG_IGN)
+with open(os.environ["IMPACT_TEST_PID_FILE"], "w") as f:
+    f.write(str(os.getpid()))
+time.sleep(120)
+"""
+"""A probe child that never answers and ignores the signals sent to the command."""
+DRIVER = """
+import contextlib, os, sys, types
+from impact_franka import commands, connection
+from impact_franka.cli import main
+sys.modules.setdefault("pylibfranka", types.ModuleType("pylibfranka"))  # never called
+connection.PROBE = sys.argv[1]
+connection.LOCK_PREFIX = sys.argv[2]
+real_lock = connection.client_lock
+
+@contextlib.contextmanager
+def watched(host):
+    with real_lock(host):
+        try:
+            yield
+        finally:
+            pid = open(os.environ["IMPACT_TEST_PID_FILE"]).read()
+            print("probe alive at release:", os.path.exists(f"/proc/{pid}"), flush=True)
+
+commands.client_lock = watched
+raise SystemExit(main(sys.argv[3:]))
+"""
+"""``impact-robot`` with the stuck probe, reporting whether the probe's child still existed
+(running or unreaped) when the one-client lock was released."""
+
+
+@pytest.mark.parametrize(("sig", "code", "group"), [
+    (signal.SIGINT, 130, False), (signal.SIGTERM, 143, False), (signal.SIGINT, 130, True),
+], ids=["sigint", "sigterm", "ctrl_c_to_the_group"])
+def test_an_interrupted_probe_ends_its_child_before_the_lock_is_released(sig, code, group,
+                                                                        tmp_path) -> None:
+    """Ctrl-C or SIGTERM while the probe waits: the child (which ignores both, as a child
+    stuck in pylibfranka does) is killed and reaped, then the lock is released; one line."""
+    pid_file = tmp_path / "probe.pid"
+    env = {**os.environ, "IMPACT_TEST_PID_FILE": str(pid_file),
+           "PYTHONPATH": os.pathsep.join([str(Path(__file__).parents[2]),
+                                          os.environ.get("PYTHONPATH", "")])}
+    command = [sys.executable, "-c", DRIVER, STUCK_PROBE, f"impact-robot-test{os.getpid()}",
+               "hold", "--host", "192.0.2.1", "--connect-timeout-s", "120", "--out",
+               str(tmp_path / "run")]
+    proc = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 30.0
+        while not (pid_file.exists() and pid_file.read_text()) and time.monotonic() < deadline:
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.05)
+        child = int(pid_file.read_text())
+        (os.killpg if group else os.kill)(proc.pid, sig)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    alive = Path(f"/proc/{child}").exists()
+    if alive:
+        os.kill(child, signal.SIGKILL)
+    assert not alive, "the probe's child outlived the command"
+    assert "probe alive at release: False" in out, out
+    assert proc.returncode == code, err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert err.startswith("impact-robot: ") and "outside the control loop" in err
+    assert ("SIGTERM" in err) == (sig == signal.SIGTERM), err
+    assert [p.name for p in tmp_path.iterdir()] == ["probe.pid"]  # no --out folder
+
+
+def test_an_interrupted_probe_call_kills_and_reaps_its_child(tmp_path) -> None:
+    """``probe`` itself: a KeyboardInterrupt during its wait leaves no child behind."""
+    pid_file = tmp_path / "probe.pid"
+    program = STUCK_PROBE.replace('os.environ["IMPACT_TEST_PID_FILE"]', repr(str(pid_file)))
+
+    def interrupt() -> None:
+        deadline = time.monotonic() + 30.0
+        while not (pid_file.exists() and pid_file.read_text()) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+
+    threading.Thread(target=interrupt, daemon=True).start()
+    with pytest.raises(KeyboardInterrupt):
+        probe("192.0.2.1", 60.0, program)
+    child = int(pid_file.read_text())
+    alive = Path(f"/proc/{child}").exists()
+    if alive:
+        os.kill(child, signal.SIGKILL)
+    assert not alive, "the probe's child outlived the interrupt"
