@@ -86,6 +86,46 @@ def _lerobot_classes() -> tuple[Any, Any]:
     return get_policy_class, make_pre_post_processors
 
 
+def policy_type(config_file: Path) -> str:
+    """The policy ``type`` that ``config_file`` (a checkpoint's ``config.json``) names; one-line
+    ``CheckpointError`` naming the file if it is missing, unreadable, not JSON, not a JSON
+    object, or without a non-empty string ``type``."""
+    import json
+
+    folder, valid = config_file.parent, "valid: the config.json lerobot-train saves"
+    if not config_file.exists():
+        raise CheckpointError(f"no LeRobot policy in {folder}: config.json is missing")
+    where = f"cannot load LeRobot policy: {config_file}"
+    if not config_file.is_file():
+        raise CheckpointError(f"{where} is not a file; {valid}")
+    try:
+        config = json.loads(config_file.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        what = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
+        raise CheckpointError(f"{where} cannot be read ({what}); {valid}") from None
+    except json.JSONDecodeError as exc:
+        raise CheckpointError(f"{where} is not JSON ({exc.msg} at line {exc.lineno} column "
+                              f"{exc.colno}); {valid}") from None
+    except RecursionError:
+        raise CheckpointError(f"{where} is not a config (nested too deeply); {valid}") from None
+    if not isinstance(config, dict):
+        raise CheckpointError(f"{where} holds a JSON {_json_kind(config)}, not an object; "
+                              f"{valid}")
+    kind = config.get("type")
+    if not isinstance(kind, str) or not kind.strip():
+        shown = "no \"type\"" if "type" not in config else f"\"type\" {kind!r}"
+        raise CheckpointError(f"{where} has {shown}; "
+                              f"{valid}, whose \"type\" names the policy (e.g. \"diffusion\")")
+    return kind
+
+
+def _json_kind(value: object) -> str:
+    """JSON's name for the type of a decoded ``value`` (not an object)."""
+    names = {list: "array", str: "string", int: "number", float: "number", bool: "boolean",
+             type(None): "null"}
+    return names.get(type(value), type(value).__name__)
+
+
 def check_features(config: Any, plan: ObservationPlan, folder: Path) -> None:
     """The checkpoint's input features must be the plan's (names and shapes), one line if not."""
     wanted = {f.policy_key: tuple(f.shape) for f in plan.features() if f.kind != "ACTION"}
@@ -104,18 +144,14 @@ def load_lerobot_policy(folder: Path, env_id: str,
     ``settings`` say (None: the task's defaults, state observations).
 
     Raises:
-        CheckpointError: LeRobot is missing, the folder holds no LeRobot policy, or its
+        CheckpointError: LeRobot is missing, the folder holds no LeRobot policy (its
+            ``config.json`` missing, damaged or not a policy's, ``policy_type``), or its
             features are not this env's (one line each).
     """
     task = env_id.split(":", 1)[-1].removeprefix(f"{ENV_NAMESPACE}/")
     settings = PluginSettings(task=task) if settings is None else settings
     get_policy_class, make_pre_post_processors = _lerobot_classes()
-    config_file = Path(folder) / "config.json"
-    if not config_file.is_file():
-        raise CheckpointError(f"no LeRobot policy in {folder}: config.json is missing")
-    import json
-
-    kind = json.loads(config_file.read_text()).get("type")
+    kind = policy_type(Path(folder) / "config.json")
     try:
         policy = get_policy_class(kind).from_pretrained(str(folder)).eval()
         pre, post = make_pre_post_processors(policy.config, pretrained_path=str(folder))

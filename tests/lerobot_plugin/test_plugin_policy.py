@@ -64,3 +64,53 @@ def test_lerobot_methods_without_lerobot_are_one_line(tmp_path) -> None:
         assert spec.controller == ("impedance" if name == "lerobot_dp" else "impact")
         with pytest.raises(CheckpointError):
             spec.build("IMPACT/Hammer-v1", None)
+
+
+def _no_lerobot_needed(monkeypatch) -> None:
+    """The config.json is read before any LeRobot class is used: stand-ins that fail the test
+    if a damaged config got that far."""
+    from impact_lerobot import policy
+
+    def looked_up(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a damaged config.json reached LeRobot")
+
+    monkeypatch.setattr(policy, "_lerobot_classes", lambda: (looked_up, looked_up))
+
+
+@pytest.mark.parametrize(("content", "message"), [
+    (b'{"type": "diffusion", "n_obs_steps": 2', "is not JSON (Expecting ',' delimiter at line 1"),
+    (b"", "is not JSON (Expecting value at line 1 column 1)"),
+    (b"\xff\xfe{}", "cannot be read (not UTF-8 text)"),
+    (b"[" * 100_000, "nested too deeply"),
+    (b'["diffusion"]', "holds a JSON array, not an object"),
+    (b"3.5", "holds a JSON number, not an object"),
+    (b'"diffusion"', "holds a JSON string, not an object"),
+    (b"null", "holds a JSON null, not an object"),
+    (b"true", "holds a JSON boolean, not an object"),
+    (b"{}", 'has no "type"'),
+    (b'{"type": 7}', 'has "type" 7'),
+    (b'{"type": ["diffusion"]}', "has \"type\" ['diffusion']"),
+    (b'{"type": "  "}', "has \"type\" '  '"),
+])
+def test_a_damaged_or_foreign_config_json_is_one_checkpoint_error(content, message, tmp_path,
+                                                                   monkeypatch) -> None:
+    """Was a raw JSONDecodeError / AttributeError: now the docstring's one line, naming the
+    file and what is wrong, before LeRobot is asked for anything."""
+    _no_lerobot_needed(monkeypatch)
+    config = tmp_path / "config.json"
+    config.write_bytes(content)
+    with pytest.raises(CheckpointError) as err:
+        load_lerobot_policy(tmp_path, "IMPACT/Hammer-v1")
+    text = str(err.value)
+    assert "\n" not in text and str(config) in text and message in text, text
+    assert "valid: the config.json lerobot-train saves" in text
+    assert config.read_bytes() == content  # read, never rewritten
+
+
+def test_a_config_json_that_is_a_folder_or_missing_is_one_line(tmp_path, monkeypatch) -> None:
+    _no_lerobot_needed(monkeypatch)
+    with pytest.raises(CheckpointError, match="config.json is missing$"):
+        load_lerobot_policy(tmp_path, "IMPACT/Hammer-v1")
+    (tmp_path / "config.json").mkdir()
+    with pytest.raises(CheckpointError, match="config.json is not a file; valid: "):
+        load_lerobot_policy(tmp_path, "IMPACT/Hammer-v1")
