@@ -14,6 +14,7 @@ import numpy as np
 
 from impact_control.errors import InvalidArgumentError
 from impact_control.policy import Policy
+from impact_envs.versions import check_not_retired
 
 ExpertFactory = Callable[[str], Policy]
 """``factory(compensation) -> Policy`` (``compensation``: ``scripted.COMPENSATIONS``)."""
@@ -47,12 +48,14 @@ def make_expert(task: str, compensation: str = "none") -> Policy:
     (``"IMPACT/Hammer-v1"``); ``compensation``: how it meets a load's sag.
 
     Raises:
-        InvalidArgumentError: Unknown task or env id, no expert for it, or a compensation
+        InvalidArgumentError: Unknown task or env id (a retired one: the line naming its
+            current id, ``versions.retired``), no expert for it, or a compensation
             the expert does not offer (each a one-line error naming the valid choices).
     """
     from impact_envs.tasks.registry import TASKS  # filled by ``import impact_envs``
 
     if "/" in task and task not in TASKS:
+        check_not_retired(task)  # a retired id: the line naming its current version
         raise InvalidArgumentError(
             f"no scripted expert for {task!r}: not a registered IMPACT task; valid: "
             f"{', '.join(TASKS)}, or a task name")

@@ -58,6 +58,7 @@ from impact_envs.cli import add_robot_set
 from impact_envs.envs.options import RobotOptions, apply_robot_overrides
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.scripted import PickPlaceExpert
+from impact_envs.versions import check_not_retired
 from impact_franka.figures import plot_protocol
 
 PHASES = ("A", "B", "C")
@@ -244,6 +245,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("results/protocol"))
     args = parser.parse_args(argv)
     try:
+        check_not_retired(args.env)  # a retired id: the line naming its current id
         check_choice("env", args.env, impact_envs.ENV_IDS)
         masses = tuple(float(m) for m in args.masses.split(","))
         _check_masses(args.env, masses)

@@ -73,3 +73,18 @@ def test_adapt_time_ignores_lag_behind_a_descending_target():
     # from about 1.5 + 0.5 ln(5.1) = 2.3 s; the descent lag at 4.2 s is outside the stretch
     assert row["adapt_liftoff_s"] == pytest.approx(2.3 - 1.2, abs=0.06)
     assert row["peak_err_z_m"] > 0.02  # the raw aloft peak still sees the descent lag
+
+
+@pytest.mark.parametrize("env_id", ["IMPACT/Dumbbell-v0", "IMPACT/Hammer-v0",
+                                    "IMPACT/HammerBasket-v0", "impact_envs:IMPACT/Dumbbell-v0"])
+def test_a_retired_env_is_one_line_naming_its_current_id(env_id, tmp_path, capsys):
+    """impact-protocol said "invalid env ... valid choices" for a -v0 id: now the retired-id
+    line of gym.make and impact-eval, naming -v1; exit 2, nothing written."""
+    from impact_envs.versions import retired
+    from impact_eval.experiments.adaptation import main
+
+    code = main(["--env", env_id, "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and err == f"impact-protocol: error: {retired(env_id)}\n", err
+    assert f"use {env_id[:-1]}1, the behaviour of the last -v0" in err
+    assert list(tmp_path.iterdir()) == []

@@ -54,3 +54,25 @@ def test_protocol_expert_validates_env_and_hold():
         protocol_expert("IMPACT/Disturbance-v1", 1.0)
     with pytest.raises(InvalidArgumentError, match="--hold-s must be >= 0"):
         protocol_expert("IMPACT/Dumbbell-v1", -1.0)
+
+
+@pytest.mark.parametrize("family", ["Hammer", "Dumbbell", "Calligraphy", "Disturbance",
+                                    "HammerBasket"])
+def test_a_retired_id_names_its_current_version(family):
+    """make_expert said "not a registered IMPACT task" for a -v0 id: now the line gym.make and
+    impact-eval give (impact_envs.versions.retired), naming -v1, for every family and for a
+    module-qualified id too."""
+    from impact_envs.versions import retired
+
+    for env_id in (f"IMPACT/{family}-v0", f"impact_envs:IMPACT/{family}-v0"):
+        with pytest.raises(InvalidArgumentError) as err:
+            make_expert(env_id)
+        assert str(err.value) == retired(env_id) and "\n" not in str(err.value)
+        assert f"use {env_id[:-1]}1" in str(err.value)
+
+
+@pytest.mark.parametrize("env_id", ["IMPACT/Hammer-v2", "IMPACT/Nope-v0", "Other/Hammer"])
+def test_an_id_that_was_never_registered_is_still_not_a_registered_task(env_id):
+    with pytest.raises(InvalidArgumentError, match="not a registered IMPACT task; valid: "
+                                                   "IMPACT/Hammer-v1"):
+        make_expert(env_id)
