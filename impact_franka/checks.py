@@ -159,15 +159,16 @@ def check_out(out: Path) -> None:
             raise InvalidArgumentError(f"invalid --out {out}: it already holds files (an earlier "
                                        f"run?); {valid}")
     try:
-        _try_writing(out)
+        try_writing(out)
     except OSError as exc:
         where = exc.filename or out
         raise InvalidArgumentError(f"invalid --out {out}: cannot create {where} "
                                    f"({exc.strerror or exc}); {valid}") from None
 
 
-def _try_writing(out: Path) -> None:
-    """Create ``out`` (with its missing parents) and a file in it, then remove all of it."""
+def try_writing(out: Path) -> None:
+    """Create ``out`` (with its missing parents) and a file in it, then remove all of it;
+    ``OSError`` (its ``filename`` the path that could not be created) if that fails."""
     absolute = out.absolute()
     missing = [p for p in (absolute, *absolute.parents) if not p.exists()]
     created: list[Path] = []

@@ -85,10 +85,18 @@ def check_writable(path: Path, name: str | None = None, replace: bool = True) ->
     """Before anything moves: a pose can be saved at ``path`` (its directory exists and is
     writable; an existing file is a writable file of valid taught poses), and ``name`` is new
     there unless ``replace``. ``InvalidArgumentError`` (one line) otherwise."""
+    from impact_franka.checks import try_writing
+
     folder = path.parent if str(path.parent) else Path(".")
+    valid = "valid: a file in a writable directory"
     if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):
         raise InvalidArgumentError(f"invalid --poses {path}: its directory is missing or not "
-                                   "writable; valid: a file in a writable directory")
+                                   f"writable; {valid}")
+    try:  # save_pose writes a file beside it: tried, since root passes os.access (/proc too)
+        try_writing(folder)
+    except OSError as exc:
+        raise InvalidArgumentError(f"invalid --poses {path}: cannot create a file in {folder} "
+                                   f"({exc.strerror or exc}); {valid}") from None
     if not path.exists():
         return
     if not path.is_file() or not os.access(path, os.W_OK) or _mode_read_only(path):

@@ -249,3 +249,22 @@ def test_out_where_nothing_can_be_created_is_refused_before_connecting(out, monk
         assert_refused(*run_cli([*command, "--out", out], capsys), f"invalid --out {out}: "
                        "cannot create")
 
+
+
+@pytest.mark.parametrize("poses", ["/proc/poses.json", "/proc/self/poses.json",
+                                   "/sys/poses.json"])
+def test_teach_refuses_poses_where_no_file_can_be_created(poses, monkeypatch, capsys) -> None:
+    """The same for ``teach --poses``: refused before connecting, not after the float."""
+    if not Path("/proc/self").is_dir():
+        pytest.skip("no /proc")
+    no_connect(monkeypatch)
+    argv = ["teach", *HOST, "--poses", poses, "--name", "pick"]
+    assert_refused(*run_cli(argv, capsys), f"invalid --poses {poses}: ")
+
+
+def test_teach_poses_in_a_writable_folder_leaves_nothing_there(tmp_path, monkeypatch,
+                                                               capsys) -> None:
+    no_connect(monkeypatch)
+    code, err = run_cli(["teach", *HOST, "--poses", str(tmp_path / "p.json"), "--name", "a"],
+                        capsys)
+    assert code == 1 and "CONNECT CALLED" in err and list(tmp_path.iterdir()) == []
