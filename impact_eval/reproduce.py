@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import shutil
 import signal
+import sys
 import tempfile
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -52,6 +53,7 @@ from impact_eval.reproduce_manifest import (
     committed_problem,
     load_manifest,
     open_table,
+    positive_int,
     record,
     sha256,
     table_entry,
@@ -102,16 +104,6 @@ def seed_scratch(table: Table, scratch: Path, cells: set[Cell]) -> None:
     (scratch / EPISODES_CSV).write_text(encode_rows({**row, **filler} for row in kept))
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 1")
-    return value
-
-
 def parser() -> argparse.ArgumentParser:
     """Parser of ``impact-eval reproduce``."""
     p = _Parser(prog=PROG, description=__doc__.splitlines()[0])
@@ -123,8 +115,8 @@ def parser() -> argparse.ArgumentParser:
                    help="write the tables' manifest entries from their current files")
     p.add_argument("--out", type=Path, help="rerun directory, kept (default: TABLE/tmp/rerun "
                    "without --check, a temporary directory removed afterwards with --check)")
-    p.add_argument("--workers", type=_positive_int, help="worker processes of the rerun")
-    p.add_argument("--envs-per-worker", type=_positive_int,
+    p.add_argument("--workers", type=positive_int, help="worker processes of the rerun")
+    p.add_argument("--envs-per-worker", type=positive_int,
                    help="lockstep envs per worker of the rerun")
     p.add_argument("--executor", default="local", choices=("local", "ray"),
                    help="local | ray")
@@ -248,31 +240,64 @@ def _open_all(a: argparse.Namespace) -> list[tuple[Table, set[Cell] | None]]:
 
 
 def _run_one(table: Table, cells: set[Cell] | None, a: argparse.Namespace) -> int:
-    """Rerun one table into --out, its tmp/rerun (kept) or a temporary directory (removed)."""
-    if a.out is not None:
-        return rerun(table, cells, a, a.out, kept=True)
-    if not a.check:
-        out = table.dir / "tmp" / "rerun"  # ignored by git; the previous rerun is replaced
-        shutil.rmtree(out, ignore_errors=True)
-        return rerun(table, cells, a, out, kept=True)
-    with tempfile.TemporaryDirectory(prefix=f"reproduce_{table.dir.name}_") as tmp:
-        return rerun(table, cells, a, Path(tmp) / table.dir.name, kept=False)
+    """Rerun one table into --out, its tmp/rerun (kept) or a temporary directory (removed).
+    Ctrl-C or SIGTERM: one stderr line saying what is left of the rerun, exit 130 or 128 + N."""
+    out = a.out
+    try:
+        if a.out is not None:
+            return rerun(table, cells, a, a.out, kept=True)
+        if not a.check:
+            out = table.dir / "tmp" / "rerun"  # ignored by git; the previous rerun is replaced
+            shutil.rmtree(out, ignore_errors=True)
+            return rerun(table, cells, a, out, kept=True)
+        with tempfile.TemporaryDirectory(prefix=f"reproduce_{table.dir.name}_") as tmp:
+            return rerun(table, cells, a, Path(tmp) / table.dir.name, kept=False)
+    except (KeyboardInterrupt, Terminated) as exc:
+        code = exc.code if isinstance(exc, Terminated) else 130
+        what = f"terminated (signal {code - 128})" if isinstance(exc, Terminated) \
+            else "interrupted"
+        print(f"{PROG}: {table.name}: {what}; {_left_behind(out)}", file=sys.stderr, flush=True)
+        raise SystemExit(code) from None
+
+
+def _left_behind(out: Path | None) -> str:
+    """What an interrupted rerun leaves: nothing (a sweep stopped midway is removed, and
+    reproduce does not resume one), or a rerun that had finished, in its kept folder."""
+    if out is not None and (out / EPISODES_CSV).is_file():
+        return f"the finished rerun is kept in {out}, not compared"
+    return ("the rerun folder was removed and nothing is kept (reproduce does not resume a "
+            "rerun); run the same command again to start it over")
+
+
+class Terminated(SystemExit):
+    """SIGTERM during a rerun (exit code 128 + the signal)."""
 
 
 def _terminated(signum: int, frame: object) -> None:
-    print(f"{PROG}: terminated (signal {signum}); the rerun folder was removed", flush=True)
-    raise SystemExit(128 + signum)
+    raise Terminated(128 + signum)
 
 
 @contextmanager
 def sigterm_unwinds() -> Iterator[None]:
-    """SIGTERM (``timeout``, CI) raises SystemExit, so the rerun's folders are removed."""
+    """SIGTERM (``timeout``, CI) raises ``Terminated`` (a SystemExit), so the rerun's folders
+    are removed."""
     with signal_handler(signal.SIGTERM, _terminated):
         yield
 
 
 def main(argv: Sequence[str]) -> int:
-    """``impact-eval reproduce ...``; returns the exit code (bad input: InvalidArgumentError)."""
+    """``impact-eval reproduce ...``; returns the exit code (bad input: InvalidArgumentError).
+    Ctrl-C outside a rerun: one line, exit 130 (no "--resume": there is nothing to
+    resume; during a rerun ``_run_one`` says what is left)."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted; no rerun was under way, nothing to resume",
+              file=sys.stderr, flush=True)
+        return 130
+
+
+def _main(argv: Sequence[str]) -> int:
     a = parser().parse_args(argv)
     if a.list:
         return list_tables(a.results)

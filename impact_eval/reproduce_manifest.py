@@ -8,6 +8,7 @@ sha256 and row count (an edited file fails the check on any CPU, before any reru
 
 from __future__ import annotations
 
+import argparse
 import hashlib
 import json
 import os
@@ -36,6 +37,17 @@ class Table(NamedTuple):
     entry: dict
     dir: Path
     run: dict
+
+
+def positive_int(text: str) -> int:
+    """argparse ``type`` of a count such as ``--workers``: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 1")
+    return value
 
 
 def sha256(path: Path) -> str:
@@ -70,7 +82,7 @@ def load_manifest(results: Path, must_exist: bool = True) -> dict:
     path = results / MANIFEST
     if not path.exists():
         if must_exist:
-            raise InvalidArgumentError(f"no {MANIFEST} in {results}; nothing to reproduce")
+            raise InvalidArgumentError(f"no {MANIFEST} in {results}")
         return {"format": MANIFEST_FORMAT, "tables": {}}
     try:
         manifest = json.loads(path.read_text())

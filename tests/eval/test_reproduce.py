@@ -17,7 +17,14 @@ from pathlib import Path
 
 import pytest
 from fixtures.eval_fake import ENV_ID, run_cli
-from fixtures.reproduce_fake import ROWS, TABLE, manifest, record_fake_table, reproduce
+from fixtures.reproduce_fake import (
+    ROWS,
+    TABLE,
+    manifest,
+    record_fake_table,
+    reproduce,
+    snapshot,
+)
 
 
 @pytest.fixture(scope="module")
@@ -123,6 +130,71 @@ def test_sigterm_mid_rerun_leaves_no_folder(results: Path, tmp_path: Path, capsy
     finally:
         timer.cancel()
     assert stopped.value.code == 128 + signal.SIGTERM
-    assert "terminated (signal 15)" in capsys.readouterr().out
+    err = [line for line in capsys.readouterr().err.splitlines() if "reproduce:" in line]
+    assert len(err) == 1 and "fake: terminated (signal 15); the rerun folder was removed" in err[0]
     assert list(scratch.iterdir()) == [] and not (tmp_path / "kept").exists()
     assert signal.getsignal(signal.SIGTERM) is before  # the handler is restored
+
+
+def _interrupted_sweep(argv: list[str]) -> int:
+    """Stand-in for the rerun's sweep: a first row written, then Ctrl-C."""
+    out = Path(argv[argv.index("--out") + 1])
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "episodes.csv").write_text("method,param_value,episode\nfake_fast,0.5,0\n")
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize("mode", [["--check"], ["--check", "--cells", "fake_fast@1"],
+                                  ["--check", "--out", "OUT"], []])
+def test_ctrl_c_mid_rerun_says_nothing_is_kept_and_leaves_nothing(
+        results: Path, tmp_path: Path, capsys, monkeypatch: pytest.MonkeyPatch,
+        mode: list[str]) -> None:
+    """Ctrl-C in the sweep (any mode: temporary folder, --cells, --out, the table's tmp/rerun):
+    one stderr line that does not offer a --resume there is nothing for, exit 130, and the
+    rerun folder is gone (the results tree is as it was)."""
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    monkeypatch.setattr("impact_eval.reproduce.run_sweep_command", _interrupted_sweep)
+    out_dir = tmp_path / "kept" / "rerun"
+    before = snapshot(results)
+    with pytest.raises(SystemExit) as stopped:
+        reproduce(results, capsys, TABLE, *[str(out_dir) if m == "OUT" else m for m in mode])
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert stopped.value.code == 130 and len(err) == 1, captured
+    assert err[0].startswith("impact-eval reproduce: fake: interrupted; the rerun folder was "
+                             "removed and nothing is kept")
+    assert "--resume" not in err[0] and "Traceback" not in captured.out + captured.err
+    assert list(scratch.iterdir()) == [] and not (tmp_path / "kept").exists()
+    assert snapshot(results) == before
+
+
+def test_ctrl_c_after_a_kept_rerun_finished_names_its_folder(
+        results: Path, tmp_path: Path, capsys, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C while the finished rerun is compared: its --out folder is kept and the line
+    says so (not "removed")."""
+    def interrupted(*_: object) -> int:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("impact_eval.reproduce.judge", interrupted)
+    out_dir = tmp_path / "rerun"
+    with pytest.raises(SystemExit) as stopped:
+        reproduce(results, capsys, "--check", TABLE, "--out", str(out_dir))
+    err = [line for line in capsys.readouterr().err.splitlines() if "reproduce:" in line]
+    assert stopped.value.code == 130  # (the sweep's progress bar is the other stderr output)
+    assert err == [f"impact-eval reproduce: fake: interrupted; the finished rerun is kept in "
+                   f"{out_dir}, not compared"]
+    assert (out_dir / "episodes.csv").read_bytes() == (results / TABLE / "episodes.csv"
+                                                       ).read_bytes()
+
+
+def test_ctrl_c_before_a_rerun_offers_no_resume(results: Path, capsys,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    def interrupted(*_: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("impact_eval.reproduce.committed_problem", interrupted)
+    code, _, err = reproduce(results, capsys, "--check", TABLE)
+    assert code == 130
+    assert err == "impact-eval reproduce: interrupted; no rerun was under way, nothing to resume\n"

@@ -22,20 +22,6 @@ def test_a_table_recorded_on_the_current_version_is_skipped() -> None:
     assert is_current({"sweep_args": ["--env", "ImpactTest/Fake-v0"]})
 
 
-def test_version_flips_pairs_episodes_and_counts_outcome_changes() -> None:
-    from impact_eval.experiments.version_flips import table_flips
-
-    head = "method,env_id,param_value,episode,success,success_once\n"
-    before = head + ("a,IMPACT/Hammer-v0,1,0,True,True\na,IMPACT/Hammer-v0,1,1,False,True\n"
-                     "b,IMPACT/Hammer-v0,1,0,True,True\n")
-    after = head + ("a,IMPACT/Hammer-v1,1,0,True,True\na,IMPACT/Hammer-v1,1,1,True,True\n"
-                    "b,IMPACT/Hammer-v1,2,0,True,True\n")
-    r = table_flips(before, after)
-    assert (r["rows"], r["missing"], r["flips"]) == (3, 2, 1)
-    assert r["methods"] == {"a": (1, 2)}  # b has no episode on both sides
-    assert r["cells"] == {("a", "1"): (1, 2, 2)}  # the one cell whose successes moved
-
-
 def test_an_unknown_table_is_one_line(capsys) -> None:
     import pytest
 
@@ -47,46 +33,106 @@ def test_an_unknown_table_is_one_line(capsys) -> None:
     assert info.value.code == 2 and len(err) == 1 and "valid: " in err[0] and "main_job" in err[0]
 
 
-def _git(repo, *args: str) -> None:
-    import subprocess
-
-    subprocess.run(["git", "-c", "user.name=t", "-c", "user.email=t@t", *args], cwd=repo,
-                   check=True, capture_output=True)
-
-
-def _commit_table(repo, version: int, rows: str, cpu: dict) -> None:
+def _results(tmp_path):
+    """A results folder whose one table ``t`` still names -v0 (so it would be rerun)."""
     import json
 
-    table = repo / "results" / "t"
-    table.mkdir(parents=True, exist_ok=True)
-    (table / "episodes.csv").write_text("method,env_id,param_value,episode,success,"
-                                        "success_once\n" + rows.replace("VER", str(version)))
-    entry = {"sweep_args": ["--env", f"IMPACT/Hammer-v{version}"], "cpu": cpu}
-    if version:
-        entry["env_version"] = version
-    (repo / "results" / "manifest.json").write_text(json.dumps({"tables": {"t": entry}}))
-    _git(repo, "add", "-A")
-    _git(repo, "commit", "-qm", f"v{version}")
+    results = tmp_path / "results"
+    (results / "t").mkdir(parents=True)
+    (results / "t" / "episodes.csv").write_text("method,param_value,episode\na,1,0\n")
+    entry = {"sweep_args": ["--env", "IMPACT/Hammer-v0", "--method", "impact"]}
+    (results / "manifest.json").write_text(json.dumps({"tables": {"t": entry}}))
+    return results
 
 
-def test_version_flips_report_names_each_sides_cpu_and_a_bad_rev_is_one_line(
-        tmp_path, capsys) -> None:
+def _fake_python(tmp_path, sweep: str):
+    """An executable that answers the interpreter probe as Python would and runs ``sweep``
+    (shell) in place of a sweep."""
+    script = tmp_path / "python"
+    script.write_text("#!/bin/sh\n"
+                      'if [ "$1" = "-c" ]; then echo impact_eval; exit 0; fi\n' + sweep + "\n")
+    script.chmod(0o755)
+    return script
+
+
+def _files(root) -> dict:
+    return {str(p.relative_to(root)): p.read_bytes() if p.is_file() else b"/"
+            for p in sorted(root.rglob("*"))}
+
+
+def _refused(capfd, argv: list[str]) -> str:
+    """``rerun_tables ARGV`` exits 2 with one stderr line, no traceback."""
     import pytest
 
-    from impact_eval.experiments.version_flips import main, report
-
-    _git(tmp_path, "init", "-q")
-    rows = "a,IMPACT/Hammer-vVER,1,0,True,True\na,IMPACT/Hammer-vVER,1,1,{},True\n"
-    _commit_table(tmp_path, 0, rows.format("False"), {"cpu_model": "Intel", "simd": "avx512"})
-    _git(tmp_path, "tag", "before")
-    _commit_table(tmp_path, 1, rows.format("True"), {"cpu_model": "AMD EPYC", "simd": "avx2"})
-    lines = report(tmp_path / "results", "before").splitlines()
-    assert lines[-2] == "| t | 2 | 0 | 1 | a 1->2 | Intel avx512 -> AMD EPYC avx2 |"
-    assert lines[-1] == "| all | 2 | 0 | 1 | | |"
+    from impact_eval.experiments.rerun_tables import main
 
     with pytest.raises(SystemExit) as info:
-        main(["--before", "no_such_rev", "--results", str(tmp_path / "results")])
-    err = capsys.readouterr().err.strip().splitlines()
-    errors = [line for line in err if "error:" in line]  # argparse's usage, then one line
-    assert info.value.code == 2 and errors == [err[-1]]
-    assert "cannot read results/manifest.json at --before no_such_rev" in err[-1]
+        main(argv)
+    err = capfd.readouterr().err.splitlines()
+    assert info.value.code == 2 and len(err) == 1, err
+    assert err[0].startswith("rerun_tables: error: ")
+    return err[0]
+
+
+def test_workers_below_one_or_not_an_integer_is_one_line(tmp_path, capfd) -> None:
+    results = _results(tmp_path)
+    for bad in ("0", "-2", "two", "1.5"):
+        line = _refused(capfd, [f"--workers={bad}", "--results", str(results)])
+        assert f"argument --workers: {bad!r} is not an integer >= 1" in line
+    assert not (results / ".rerun").exists()
+
+
+def test_a_bad_results_is_one_line(tmp_path, capfd) -> None:
+    line = _refused(capfd, ["--results", str(tmp_path / "missing")])
+    assert line == f"rerun_tables: error: no manifest.json in {tmp_path / 'missing'}"
+    (tmp_path / "manifest.json").write_text('{"tables": ')
+    line = _refused(capfd, ["--results", str(tmp_path)])
+    assert line.startswith(f"rerun_tables: error: cannot read {tmp_path / 'manifest.json'}: ")
+
+
+def test_a_python_that_cannot_run_the_sweeps_is_one_line_before_anything_runs(
+        tmp_path, capfd) -> None:
+    results = _results(tmp_path)
+    before = _files(results)
+    missing = tmp_path / "no_such_python"
+    line = _refused(capfd, ["--python", str(missing), "--results", str(results)])
+    assert line == f"rerun_tables: error: --python {missing}: no such executable"
+    for program in ("/bin/false", "/bin/echo"):  # runs, but is not a Python with the package
+        line = _refused(capfd, ["--python", program, "--results", str(results)])
+        assert line.startswith(f"rerun_tables: error: --python {program} cannot import "
+                               "impact_eval: ")
+    no_package = _fake_python(tmp_path, "exit 0")
+    no_package.write_text("#!/bin/sh\necho 'ModuleNotFoundError: No module named impact_eval' "
+                          ">&2\nexit 1\n")
+    line = _refused(capfd, ["--python", str(no_package), "--results", str(results)])
+    assert line.endswith("cannot import impact_eval: ModuleNotFoundError: No module named "
+                         "impact_eval")
+    assert _files(results) == before
+
+
+def test_a_childs_refusal_is_its_own_line_and_exit_code(tmp_path, capfd) -> None:
+    """The sweep refuses (exit 2, its one line): that line alone on stderr, exit 2, the table
+    untouched; another exit code (1, a signal) is passed on the same way."""
+    from impact_eval.experiments.rerun_tables import main
+
+    results = _results(tmp_path)
+    before = _files(results)
+    refusal = "impact-eval: error: invalid method 'impact'; valid choices: x"
+    for sweep, code in ((f'echo "{refusal}" >&2; exit 2', 2), ("exit 1", 1),
+                        ("kill -9 $$", 137)):
+        python = _fake_python(tmp_path, sweep)
+        assert main(["--python", str(python), "--results", str(results)]) == code
+        err = capfd.readouterr().err.splitlines()
+        assert err == ([refusal] if code == 2 else [])
+        assert _files(results) == before
+
+
+def test_a_sweep_that_writes_no_rows_keeps_the_table(tmp_path, capfd) -> None:
+    """A sweep exiting 0 without an episodes.csv does not replace the table by nothing."""
+    results = _results(tmp_path)
+    before = _files(results)
+    line = _refused(capfd, ["--python", str(_fake_python(tmp_path, "exit 0")),
+                            "--results", str(results)])
+    assert line == (f"rerun_tables: error: the sweep of t wrote no "
+                    f"{results / '.rerun' / 't' / 'episodes.csv'}; {results / 't'} is kept")
+    assert _files(results) == before
