@@ -4,7 +4,9 @@ controller config of ``controller_preset``, the initial task parameters, one-lin
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import importlib
+import inspect
 from collections.abc import Mapping
 from typing import TypeVar
 
@@ -55,15 +57,54 @@ def check_args(controller: str, reward_type: str, controller_preset: str | Contr
 
 
 def initial_params(task: Task, object_mass: float | None,
-                   task_params: dict[str, float] | None) -> dict[str, float]:
-    """The task's defaults, then the ``object_mass`` shorthand, then ``task_params``."""
+                   task_params: Mapping[str, float] | None) -> dict[str, float]:
+    """The task's defaults, then the ``object_mass`` shorthand, then ``task_params``.
+
+    One-line errors: ``task_params`` not a mapping, a key that is not one of the task's
+    parameters, a bad value, and ``object_mass`` given by both routes with two different
+    values (equal values pass; which route would win is not the user's to guess)."""
+    if task_params is not None and not isinstance(task_params, Mapping):
+        raise InvalidArgumentError(
+            f"invalid task_params {task_params!r} ({type(task_params).__name__}); valid: a "
+            f"dict of task parameters ({', '.join(p.name for p in task.params)})")
     params = {p.name: p.default for p in task.params}
+    given = {name: task.param(name).validate(value)
+             for name, value in (task_params or {}).items()}
     if object_mass is not None:
-        params[task.param("object_mass").name] = task.param("object_mass").validate(
-            object_mass)
-    for name, value in (task_params or {}).items():
-        params[name] = task.param(name).validate(value)
+        mass = task.param("object_mass").validate(object_mass)
+        if given.get("object_mass", mass) != mass:
+            raise InvalidArgumentError(
+                f"object_mass given twice with different values: object_mass={object_mass!r} "
+                f"and task_params['object_mass']={task_params['object_mass']!r}; valid: one "
+                "of them, or both equal")
+        params["object_mass"] = mass
+    params.update(given)
     return params
+
+
+def constructor_keywords(cls: type) -> list[str]:
+    """The keywords named by the ``__init__`` of ``cls`` and of its base classes."""
+    valid: list[str] = []
+    for klass in cls.__mro__:
+        if "__init__" in vars(klass):
+            parameters = inspect.signature(vars(klass)["__init__"]).parameters.values()
+            valid += [p.name for p in parameters if p.name != "self" and p.name not in valid
+                      and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    return valid
+
+
+def refuse_unknown_keywords(cls: type, unknown: Mapping[str, object]) -> None:
+    """One-line error naming the keywords ``cls`` takes (and the closest one) if ``unknown``
+    (the keywords no ``__init__`` named) is not empty: ``gym.make``'s keyword arguments reach
+    the env's constructor, and Python's own ``TypeError`` names no valid keyword."""
+    if not unknown:
+        return
+    valid = constructor_keywords(cls)
+    close = difflib.get_close_matches(str(next(iter(unknown))), valid, n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    raise InvalidArgumentError(
+        f"unknown keyword argument(s) {', '.join(map(repr, unknown))} for {cls.__name__}"
+        f"{hint}; valid: {', '.join(valid)}")
 
 
 OPTION_ARGUMENTS: dict[str, tuple[type, str | None]] = {

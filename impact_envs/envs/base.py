@@ -30,6 +30,7 @@ from impact_envs.envs.arguments import (
     env_options,
     initial_params,
     load_task,
+    refuse_unknown_keywords,
 )
 from impact_envs.envs.carry import ControllerCarry, apply_carry, check_carry, controller_carry
 from impact_envs.envs.observation_space import state_space
@@ -40,6 +41,18 @@ from impact_envs.envs.state import EnvState, capture, restore
 from impact_envs.loop import ClosedLoop, TickTargets
 from impact_envs.tasks.base import Task, refresh_constants
 from impact_envs.torch_threads import limit_torch_threads
+
+ACTION_ENTRIES = ("x", "y", "z", *(f"rot6d[{i}]" for i in range(6)), "gripper")
+"""What each of the 10 action entries is (TCP target position, rot6d, gripper command)."""
+
+
+def check_finite_action(action: np.ndarray) -> None:
+    """One-line error naming the entries of a (10,) ``action`` that are NaN or infinite."""
+    bad = np.flatnonzero(~np.isfinite(action))
+    if bad.size:
+        entries = ", ".join(f"action[{i}] ({ACTION_ENTRIES[i]}) = {action[i]}" for i in bad)
+        raise InvalidArgumentError(f"action holds non-finite values: {entries}; valid: finite "
+                                   "numbers in every entry")
 
 
 def ticks_for_step(k: int) -> int:
@@ -73,8 +86,11 @@ class ImpactEnv(gym.Env):
         render: RenderOptions | Mapping[str, Any] | None = None,
         reward_type: str = "sparse",
         observation: ObservationOptions | Mapping[str, Any] | str | None = None,
+        **unknown: object,
     ) -> None:
-        self._init_kwargs = {k: v for k, v in locals().items() if k not in ("self", "__class__")}
+        refuse_unknown_keywords(type(self), unknown)  # one line naming the valid keywords
+        self._init_kwargs = {k: v for k, v in locals().items()
+                             if k not in ("self", "__class__", "unknown")}
         """The constructor's arguments (``__deepcopy__`` and pickling rebuild from them)."""
         check_args(controller, reward_type, controller_preset, render_mode,
                    self.metadata["render_modes"])
@@ -84,12 +100,13 @@ class ImpactEnv(gym.Env):
         self.terminate_on_success = bool(terminate_on_success)
         self.persist_internal_model = bool(persist_internal_model)
         self.task = task = self.make_task() if task is None else load_task(task)
+        params = initial_params(task, object_mass, task_params)  # refused before building
         self.sim, self.dynamics, self.realism = build_robot(robot, task.scene_xml,
                                                             task.object_bodies, task.hand)
         self.robot_profile = robot.realism
         """The robot profile's name (``info["robot_profile"]``; ``RobotOptions.realism``)."""
         task.bind(self.sim)
-        self._params = initial_params(task, object_mass, task_params)
+        self._params = params
         cfg, self.controller_preset = controller_config(controller_preset)
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
         limit_torch_threads()
@@ -250,9 +267,10 @@ class ImpactEnv(gym.Env):
             a = np.asarray(action, dtype=np.float64)
         except (TypeError, ValueError) as exc:
             raise InvalidArgumentError(f"action must be a (10,) array of numbers: {exc}") from None
-        if a.shape != (10,) or not np.isfinite(a).all():
+        if a.shape != (10,):
             raise InvalidArgumentError(
-                f"action must be a (10,) array of finite numbers, got shape {a.shape}")
+                f"action must be a (10,) array of numbers, got shape {a.shape}")
+        check_finite_action(a)
         pos = np.clip(a[:3], self.task.workspace_low, self.task.workspace_high)
         quat = matrix_to_quat(matrix_from_rot6d(a[3:9]))
         if np.dot(quat, self._target_quat) < 0.0:

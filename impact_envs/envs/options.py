@@ -4,11 +4,11 @@ observations."""
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields, replace
 from numbers import Integral, Real
 
-from impact_control.errors import InvalidArgumentError
+from impact_control.errors import InvalidArgumentError, check_choice
 from impact_envs.robot.hand import HANDS, check_grasp_force, check_hand
 from impact_envs.robot.realism import REALISMS as REALISMS  # re-exported
 from impact_envs.robot.realism import Realism
@@ -214,23 +214,51 @@ def apply_robot_overrides(robot: RobotOptions | None, overrides: Sequence[str]) 
             raise InvalidArgumentError(
                 f"invalid --robot-set {item!r}; valid: FIELD=VALUE with FIELD one of "
                 f"{', '.join(names)}")
-        changes[name] = _parse_field(name, text.strip(), getattr(RobotOptions(), name))
+        changes[name] = _parse_field(name, text.strip())
     return replace(base, **changes)
 
 
-def _parse_field(name: str, text: str, default: object) -> object:
-    """``text`` as ``RobotOptions.name``'s value (its default's type; None-able fields)."""
-    low = text.lower()
-    if low == "none" and name != "realism":
+ROBOT_CHOICES: dict[str, tuple[str, ...]] = {
+    "hand": tuple(HANDS), "realism": REALISMS, "torque_reading": TORQUE_READINGS}
+"""``RobotOptions`` fields whose value is one of a set of names."""
+
+
+def _read_bool(text: str) -> bool:
+    """``true`` or ``false`` (any case) as a bool; ValueError otherwise."""
+    if text.lower() not in ("true", "false"):
+        raise ValueError(text)
+    return text.lower() == "true"
+
+
+_READERS: dict[str, tuple[Callable[[str], object], str]] = {
+    "bool": (_read_bool, "true or false"), "int": (int, "an integer"),
+    "float": (float, "a number"), "str": (str, "a name")}
+"""How ``--robot-set`` reads a value of each field type, and how its errors name the type."""
+
+
+def robot_field_types() -> dict[str, tuple[str, bool]]:
+    """Each ``RobotOptions`` field's type name (a key of ``_READERS``) and whether it may be
+    None, from its annotation (e.g. ``"int | None"`` is ``("int", True)``)."""
+    types = {}
+    for f in fields(RobotOptions):
+        parts = [part.strip() for part in str(f.type).split("|")]
+        types[f.name] = (parts[0], "None" in parts)
+    return types
+
+
+def _parse_field(name: str, text: str) -> object:
+    """``text`` as ``RobotOptions.name``'s value, read as the field's type (``none``: None
+    where the field may be None); a one-line error naming that type or the valid choices."""
+    kind, optional = robot_field_types()[name]
+    if optional and text.lower() == "none":
         return None
-    if isinstance(default, bool):
-        if low in ("true", "false"):
-            return low == "true"
-        raise InvalidArgumentError(f"invalid --robot-set {name}={text!r}; valid: true or false")
-    if isinstance(default, str) or name in ("hand", "realism", "torque_reading"):
+    if name in ROBOT_CHOICES:
+        check_choice(name, text, ROBOT_CHOICES[name] + (("none",) if optional else ()))
         return text
+    read, valid = _READERS[kind]
     try:
-        return int(text) if name in ("model_seed", "delay_ticks") else float(text)
+        return read(text)
     except ValueError:
+        or_none = " or none" if optional else ""
         raise InvalidArgumentError(
-            f"invalid --robot-set {name}={text!r}; valid: a number") from None
+            f"invalid --robot-set {name}={text!r}; valid: {valid}{or_none}") from None
