@@ -56,6 +56,10 @@ __all__ = ["CHECKPOINTS_ENV_VAR", "SHORTCUTS", "MethodSpec", "checkpoint_dir", "
            "env_short_name", "method_choices", "register_method", "resolve_method",
            "temporary_method"]
 
+WARM_CONTROLLER = "impact"
+"""The controller whose internal model ``warm`` warms up (``warm.py``); on another it would do
+nothing."""
+
 SB3_PREFIXES = {"sb3:": "impact", "sb3_impedance:": "impedance"}
 """Method-name prefixes of a Stable-Baselines3 zip and the controller each runs under."""
 
@@ -95,6 +99,11 @@ class MethodSpec:
                 f"method {self.name!r}: carry and warm exclude each other (a carried chain "
                 "already starts each episode from the internal model the previous one left); "
                 "choose one")
+        if self.warm and self.controller != WARM_CONTROLLER:
+            raise InvalidArgumentError(
+                f"method {self.name!r}: warm warms IMPACT's internal model, which the "
+                f"{self.controller} controller does not have; valid: warm on the "
+                f"{WARM_CONTROLLER} controller (POLICY+{WARM_CONTROLLER}[@PRESET]+warm)")
 
     @property
     def env_key(self) -> tuple[str, str, str | None, ObservationOptions | None,
@@ -162,8 +171,8 @@ def compose(composition: str, name: str | None = None,
     """
     policy_text, _, rest = composition.partition("+")
     control, *flags = rest.split("+") if rest else [""]
-    controller, _, preset = control.partition("@")
-    preset = preset or "default"
+    controller, at, preset = control.partition("@")
+    preset = preset if at else "default"  # "impact@" names no preset: refused below
     try:
         part = policy_part(policy_text)
         check_choice("controller", controller, CONTROLLERS)

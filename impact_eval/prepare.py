@@ -13,7 +13,7 @@ from pathlib import Path
 
 from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_eval import csvio, runinfo
-from impact_eval.bins import bin_param_name
+from impact_eval.bins import bin_param_name, check_bin_param
 from impact_eval.checkpoints import fingerprint, policy_checkpoint
 from impact_eval.code_check import check_same_code
 from impact_eval.envs import (
@@ -25,6 +25,7 @@ from impact_eval.envs import (
     method_env,
     precompile_kernels,
     probe_values,
+    task_params,
 )
 from impact_eval.grid import episode_seed, format_value
 from impact_eval.methods import MethodSpec, resolve_method
@@ -117,6 +118,8 @@ def _inspect_env(sweep: SweepSpec, methods: list[MethodSpec], values: list[float
         first = next(iter(envs.values()))
         info = describe_env(first, sweep.param)
         check_param(info, sweep.param)
+        if sweep.bin_highs:
+            check_bin_param(sweep.env_id, info.param_name, task_params(first))
         probe_values(first, info.param_name, values)
         for env in envs.values():
             precompile_kernels(env)

@@ -56,6 +56,10 @@ def test_parts_map_to_the_spec() -> None:
     ("dp.vanilla+impact+warm+warm", "a flag repeats"),
     ("dp.vanilla+impact+warm+carry", "carry and warm exclude each other"),
     ("dp.vanilla+", "invalid controller ''"),
+    ("scripted+impact@", "invalid preset ''; valid choices: default, paper"),  # issue 53
+    ("dp.vanilla+impact@+carry", "invalid preset ''; valid choices: default, paper"),
+    ("scripted+impedance+warm", "valid: warm on the impact controller"),
+    ("dp.nominal+impedance@paper+warm", "the impedance controller does not have"),
 ])
 def test_a_bad_composition_is_one_line_naming_the_choices(name: str, named: str) -> None:
     with pytest.raises(InvalidArgumentError) as info:
