@@ -29,7 +29,7 @@ from impact_eval.envs import (
     task_params,
 )
 from impact_eval.grid import episode_seed, format_value
-from impact_eval.methods import MethodSpec, resolve_method
+from impact_eval.methods import MethodSpec, check_overrides_keep_flags, resolve_method
 from impact_eval.report import EPISODES_CSV
 from impact_eval.spec import RunOptions, SweepSpec
 from impact_eval.sweep import SweepConfig
@@ -48,9 +48,14 @@ class Plan:
     """Written to ``identity.json`` before the first row (``runinfo.IDENTITY_JSON``)."""
 
 
-def resolve_methods(names: tuple[str, ...]) -> list[MethodSpec]:
-    """The spec's method names -> methods (an unknown name is one line naming the choices)."""
-    return [resolve_method(n) for n in names]
+def resolve_methods(names: tuple[str, ...], robot_overrides: tuple[str, ...] = ()
+                    ) -> list[MethodSpec]:
+    """The spec's method names -> methods (an unknown name is one line naming the choices;
+    so is a ``--robot-set`` that undoes a method's flag, ``check_overrides_keep_flags``)."""
+    methods = [resolve_method(n) for n in names]
+    for method in methods:
+        check_overrides_keep_flags(method, robot_overrides)
+    return methods
 
 
 def check_out_dir(out: Path) -> None:
@@ -207,7 +212,7 @@ def prepare(spec: SweepSpec, options: RunOptions) -> Plan:
 
         require_video()
     check_env_id(spec.env_id)  # imports the env's module, which may register methods too
-    methods = resolve_methods(spec.methods)
+    methods = resolve_methods(spec.methods, spec.robot_overrides)
     info = _inspect_env(spec, methods, sorted({*spec.values, *spec.bin_highs}))  # bin edges too
     check_out_dir(options.out)
     continuing = options.resume or options.extend
