@@ -23,6 +23,7 @@ from impact_control.policy import Policy
 from impact_control.presets import PRESETS
 from impact_envs.envs.arguments import coerce_options
 from impact_envs.envs.options import ObservationOptions
+from impact_eval.bins import edge_text
 from impact_eval.grid import format_value
 from impact_eval.methods import MethodSpec, temporary_method
 from impact_eval.spec import RunOptions, SweepSpec, values_from_text
@@ -66,7 +67,7 @@ def grid_or_bins(values: object) -> tuple[str | None, str | None]:
             raise InvalidArgumentError(
                 f"invalid bins {values!r}; valid: (lo, hi) pairs, e.g. [(0.1, 0.3), (0.3, 0.5)]")
         edges = [check_values(list(v)) for v in values]
-        return None, ",".join(f"{format_value(lo)}-{format_value(hi)}" for lo, hi in edges)
+        return None, ",".join(f"{edge_text(lo)}-{edge_text(hi)}" for lo, hi in edges)
     return ",".join(format_value(v) for v in check_values(values)), None
 
 
@@ -186,7 +187,8 @@ def evaluate(
         env_id: A registered env id (``"IMPACT/Hammer-v1"``; ``"module:ID"`` imports module).
         values: Parameter values, e.g. masses [kg]; each is one cell of ``episodes`` episodes.
             Or mass bins as ``(lo, hi)`` pairs [kg], ``[lo, hi)`` each: every episode draws
-            its value in its bin from its seed (``impact-eval --mass-bins``).
+            its mass in its bin from its seed (``impact-eval --mass-bins``; the env's mass
+            only, ``bins.check_bin_param``).
         out: Output directory: ``episodes.csv``, ``summary.csv``, ``run.json``, ``plots/``.
         episodes: Episodes per value (paired seeds, as the CLI's).
         controller: ``"impact"`` or ``"impedance"``.

@@ -116,6 +116,12 @@ class EnvInfo:
     param_names: tuple[str, ...] = ()
 
 
+def task_params(env: gym.Env) -> tuple[object, ...]:
+    """The ``TaskParam``s the env's task declares (name, default, range, unit); none for an
+    env without a task (a plugin's)."""
+    return tuple(getattr(getattr(env.unwrapped, "task", None), "params", ()))
+
+
 def describe_env(env: gym.Env, requested: str | None = None) -> EnvInfo:
     """Read parameter name, periods [s] and the serialised spec of a built env.
 
@@ -124,7 +130,7 @@ def describe_env(env: gym.Env, requested: str | None = None) -> EnvInfo:
     """
     base = env.unwrapped
     default_name = getattr(base, "param_name", None) or DEFAULT_PARAM_NAME
-    declared = tuple(p.name for p in getattr(getattr(base, "task", None), "params", ()))
+    declared = tuple(p.name for p in task_params(env))
     names = declared or (str(default_name),)
     param_name = requested if requested in names else default_name
     policy_dt = getattr(base, "policy_dt", None) or getattr(base, "dt", None)

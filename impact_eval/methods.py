@@ -47,14 +47,19 @@ from dataclasses import asdict, dataclass
 from impact_control.controller import CONTROLLERS
 from impact_control.errors import InvalidArgumentError, check_choice
 from impact_control.presets import PRESETS
-from impact_envs.envs.options import ObservationOptions, RobotOptions
+from impact_envs.envs.options import ObservationOptions, RobotOptions, apply_robot_overrides
 from impact_eval.checkpoints import CHECKPOINTS_ENV_VAR, checkpoint_dir, env_short_name
 from impact_eval.method_parts import AUTHORS_ROBOT, FLAGS, PolicyFactory, policy_part
 from impact_eval.sb3 import load_sb3, sb3_action_mode
 
-__all__ = ["CHECKPOINTS_ENV_VAR", "SHORTCUTS", "MethodSpec", "checkpoint_dir", "compose",
+__all__ = ["CHECKPOINTS_ENV_VAR", "SHORTCUTS", "MethodSpec", "check_overrides_keep_flags",
+           "checkpoint_dir", "compose",
            "env_short_name", "method_choices", "register_method", "resolve_method",
            "temporary_method"]
+
+WARM_CONTROLLER = "impact"
+"""The controller whose internal model ``warm`` warms up (``warm.py``); on another it would do
+nothing."""
 
 SB3_PREFIXES = {"sb3:": "impact", "sb3_impedance:": "impedance"}
 """Method-name prefixes of a Stable-Baselines3 zip and the controller each runs under."""
@@ -95,6 +100,11 @@ class MethodSpec:
                 f"method {self.name!r}: carry and warm exclude each other (a carried chain "
                 "already starts each episode from the internal model the previous one left); "
                 "choose one")
+        if self.warm and self.controller != WARM_CONTROLLER:
+            raise InvalidArgumentError(
+                f"method {self.name!r}: warm warms IMPACT's internal model, which the "
+                f"{self.controller} controller does not have; valid: warm on the "
+                f"{WARM_CONTROLLER} controller (POLICY+{WARM_CONTROLLER}[@PRESET]+warm)")
 
     @property
     def env_key(self) -> tuple[str, str, str | None, ObservationOptions | None,
@@ -162,8 +172,8 @@ def compose(composition: str, name: str | None = None,
     """
     policy_text, _, rest = composition.partition("+")
     control, *flags = rest.split("+") if rest else [""]
-    controller, _, preset = control.partition("@")
-    preset = preset or "default"
+    controller, at, preset = control.partition("@")
+    preset = preset if at else "default"  # "impact@" names no preset: refused below
     try:
         part = policy_part(policy_text)
         check_choice("controller", controller, CONTROLLERS)
@@ -199,6 +209,27 @@ def resolve_method(name: str) -> MethodSpec:
             f"unknown method {name!r}; valid choices: {', '.join(method_choices())}"
         )
     return _REGISTRY[name]
+
+
+def check_overrides_keep_flags(spec: MethodSpec, robot_overrides: tuple[str, ...]) -> None:
+    """One line if a ``--robot-set`` item changes a robot field ``spec`` fixes (its
+    ``+commanded`` flag: ``torque_reading='commanded'``), naming both: the rows would be
+    another method's under this one's name. An item that sets the same value, or another
+    field (``realism=fr3``), passes; ``carry`` and ``warm`` are no robot or controller field,
+    so no override can undo them, and ``--controller-set`` changes the preset by design."""
+    if spec.robot is None or not robot_overrides:
+        return
+    default = RobotOptions()
+    fixed = {f: v for f, v in asdict(spec.robot).items() if v != getattr(default, f)}
+    robot = apply_robot_overrides(spec.robot, robot_overrides)  # what would run
+    for field, value in fixed.items():
+        if getattr(robot, field) == value:
+            continue
+        item = [i for i in robot_overrides if i.partition("=")[0].strip() == field][-1]
+        flag = "+commanded" if getattr(AUTHORS_ROBOT, field) == value else "robot setting"
+        raise InvalidArgumentError(
+            f"--robot-set {item!r} contradicts method {spec.name!r}'s {flag} "
+            f"({field}={value!r}); valid: drop the override, or a method without {flag}")
 
 
 SHORTCUTS = (

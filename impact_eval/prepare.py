@@ -7,13 +7,14 @@ directory, resume state, and finally one build of every method's policy (checkpo
 
 from __future__ import annotations
 
+import math
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_eval import csvio, runinfo
-from impact_eval.bins import bin_param_name
+from impact_eval.bins import bin_param_name, check_bin_param, draw_in_bin
 from impact_eval.checkpoints import fingerprint, policy_checkpoint
 from impact_eval.code_check import check_same_code
 from impact_eval.envs import (
@@ -25,9 +26,10 @@ from impact_eval.envs import (
     method_env,
     precompile_kernels,
     probe_values,
+    task_params,
 )
 from impact_eval.grid import episode_seed, format_value
-from impact_eval.methods import MethodSpec, resolve_method
+from impact_eval.methods import MethodSpec, check_overrides_keep_flags, resolve_method
 from impact_eval.report import EPISODES_CSV
 from impact_eval.spec import RunOptions, SweepSpec
 from impact_eval.sweep import SweepConfig
@@ -46,9 +48,14 @@ class Plan:
     """Written to ``identity.json`` before the first row (``runinfo.IDENTITY_JSON``)."""
 
 
-def resolve_methods(names: tuple[str, ...]) -> list[MethodSpec]:
-    """The spec's method names -> methods (an unknown name is one line naming the choices)."""
-    return [resolve_method(n) for n in names]
+def resolve_methods(names: tuple[str, ...], robot_overrides: tuple[str, ...] = ()
+                    ) -> list[MethodSpec]:
+    """The spec's method names -> methods (an unknown name is one line naming the choices;
+    so is a ``--robot-set`` that undoes a method's flag, ``check_overrides_keep_flags``)."""
+    methods = [resolve_method(n) for n in names]
+    for method in methods:
+        check_overrides_keep_flags(method, robot_overrides)
+    return methods
 
 
 def check_out_dir(out: Path) -> None:
@@ -69,7 +76,9 @@ def check_out_dir(out: Path) -> None:
 
 def load_done(spec: SweepSpec, options: RunOptions, env: EnvInfo,
               row_param_name: str) -> set[csvio.EpisodeKey]:
-    """Cells already in ``episodes.csv`` (``--resume``), checked against this grid's seeds."""
+    """Cells already in ``episodes.csv`` (``--resume``): every row must be one of this run's
+    cells, with this grid's seed and, in a bin, the mass its bin and seed draw
+    (``check_row``); the first that is not is refused in one line."""
     path = options.out / EPISODES_CSV
     if not path.exists() or path.stat().st_size == 0:  # 0 bytes: the writer starts it afresh
         return set()
@@ -80,26 +89,56 @@ def load_done(spec: SweepSpec, options: RunOptions, env: EnvInfo,
         )
     index = {format_value(v): i for i, v in enumerate(spec.values)}
     done = set()
-    for row in csvio.read_rows(path):
-        key = csvio.row_key(row)
+    for line, row in enumerate(csvio.read_rows(path), start=2):
         if row["env_id"] != env.env_id or row["param_name"] != row_param_name:
             raise InvalidArgumentError(
                 f"cannot resume: {path} holds {row['env_id']}/{row['param_name']} episodes"
             )
-        vi = index.get(key[1])
-        try:
-            seed = int(row["seed"])
-        except ValueError:
+        problem = check_row(spec, row, index)
+        if problem:
             raise InvalidArgumentError(
-                f"cannot resume: {path} has a row with seed {row['seed']!r} (episode {key}); "
-                "fix or delete that row") from None
-        if vi is not None and seed != episode_seed(spec.seed, vi, key[2]):
-            raise InvalidArgumentError(
-                f"cannot resume: seeds in {path} do not match this grid and --seed "
-                "(was the grid changed?); use the original arguments or another --out"
-            )
-        done.add(key)
+                f"cannot resume: {path} line {line} ({row['method']} @ {row['param_value']}, "
+                f"episode {row['episode']}) is not a row of this run: {problem}; delete it, "
+                "or use the original arguments or another --out")
+        done.add(csvio.row_key(row))
     return done
+
+
+def check_row(spec: SweepSpec, row: dict[str, str], index: dict[str, int]) -> str | None:
+    """Why ``row`` of an existing ``episodes.csv`` is not one of ``spec``'s cells (None: it
+    is): another method, value or bin, an episode index beyond ``spec.episodes``, another
+    seed, or in a bin a ``drawn_mass_kg`` its bin and seed do not draw (``draw_in_bin``)."""
+    method, value, episode = csvio.row_key(row)
+    if method not in spec.methods:
+        return f"method {method!r} is not among {', '.join(spec.methods)}"
+    vi = index.get(value)
+    if vi is None:
+        kind = "bin lower edge" if spec.bin_highs else "value"
+        return f"{kind} {row['param_value']} is not among {list(spec.values)}"
+    if not 0 <= episode < spec.episodes:
+        return f"episode {episode} is beyond --episodes {spec.episodes}"
+    try:
+        seed = int(row["seed"])
+    except ValueError:
+        return f"seed {row['seed']!r} is not an integer"
+    if seed != episode_seed(spec.seed, vi, episode):
+        return "its seed is not this grid's and --seed's (was the grid changed?)"
+    if spec.bin_highs:
+        return _check_draw(row["drawn_mass_kg"], spec.values[vi], spec.bin_highs[vi], seed)
+    return None
+
+
+def _check_draw(recorded: str, lo: float, hi: float, seed: int) -> str | None:
+    """Why a bin row's ``drawn_mass_kg`` text is not the mass its bin and seed draw (None: it
+    is, or the env reported no mass: ``nan``)."""
+    try:
+        mass = float(recorded)
+    except ValueError:
+        return f"drawn_mass_kg {recorded!r} is not a number"
+    if math.isnan(mass) or mass == draw_in_bin(lo, hi, seed):
+        return None
+    return (f"its drawn_mass_kg {recorded} is not the mass bin [{lo!r}, {hi!r}) draws from its "
+            "seed (rows drawn in other bins?)")
 
 
 def _inspect_env(sweep: SweepSpec, methods: list[MethodSpec], values: list[float]) -> EnvInfo:
@@ -117,6 +156,8 @@ def _inspect_env(sweep: SweepSpec, methods: list[MethodSpec], values: list[float
         first = next(iter(envs.values()))
         info = describe_env(first, sweep.param)
         check_param(info, sweep.param)
+        if sweep.bin_highs:
+            check_bin_param(sweep.env_id, info.param_name, task_params(first))
         probe_values(first, info.param_name, values)
         for env in envs.values():
             precompile_kernels(env)
@@ -171,7 +212,7 @@ def prepare(spec: SweepSpec, options: RunOptions) -> Plan:
 
         require_video()
     check_env_id(spec.env_id)  # imports the env's module, which may register methods too
-    methods = resolve_methods(spec.methods)
+    methods = resolve_methods(spec.methods, spec.robot_overrides)
     info = _inspect_env(spec, methods, sorted({*spec.values, *spec.bin_highs}))  # bin edges too
     check_out_dir(options.out)
     continuing = options.resume or options.extend

@@ -20,7 +20,7 @@ from impact_control.errors import InvalidArgumentError
 from impact_control.overrides import apply_overrides
 from impact_envs.envs.options import apply_robot_overrides
 from impact_envs.parallel import check_executor
-from impact_eval.bins import MassBin, format_bins, parse_bins
+from impact_eval.bins import MassBin, check_bins, format_bins, parse_bins
 from impact_eval.grid import format_value, parse_grid
 
 SPEC_FORMAT = 1
@@ -117,7 +117,7 @@ class SweepSpec:
             if len(self.bin_highs) != len(self.values):
                 raise InvalidArgumentError(
                     f"{len(self.values)} bin lower edges but {len(self.bin_highs)} upper ones")
-            parse_bins(format_bins(self.bins))  # reversed, out of order, overlapping
+            check_bins(self.bins)  # reversed, out of order, overlapping
         elif len(set(self.values)) != len(self.values):
             raise InvalidArgumentError(f"duplicate values in {list(self.values)}")
 

@@ -85,9 +85,11 @@ def sweep_parser() -> argparse.ArgumentParser:
     grid.add_argument(
         "--mass-bins",
         metavar="BINS",
-        help="bins [LO, HI) of the env's parameter instead of fixed values, e.g. "
-        "0.1-0.3,0.3-0.5,0.5-1: each episode draws its value uniformly in its bin from its "
-        "seed (episodes.csv: drawn_mass_kg; param_value is the bin's LO)",
+        help="bins [LO, HI) in kg of the env's mass instead of fixed values, e.g. "
+        "0.1-0.3,0.3-0.5,0.5-1: each episode draws its mass uniformly in its bin from its "
+        "seed (episodes.csv: drawn_mass_kg; param_value is the bin's LO). The mass is "
+        "object_mass (Calligraphy: tool_mass; Disturbance, whose first parameter is a push: "
+        "give --param object_mass); any other parameter is refused: sweep it as a grid",
     )
     _add_spec_options(p)
     _add_output_options(p)

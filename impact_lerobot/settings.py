@@ -19,6 +19,7 @@ from impact_envs import ENV_IDS, ObservationOptions
 from impact_envs.tasks.base import Task, TaskParam
 from impact_envs.tasks.registry import task_class
 from impact_envs.versions import check_not_retired
+from impact_eval.bins import mass_param_name
 
 GYM_NAMESPACE = "gym_impact"
 """LeRobot 0.4.4 makes ``gym_<type>/<task>``: the wrapped envs are registered under it."""
@@ -32,13 +33,13 @@ exported, docs/lerobot.md), so a policy trained on an export sees the same featu
 
 def mass_param(task: type[Task]) -> TaskParam:
     """The task parameter a mass setting sets: ``object_mass``, else the task's first
-    parameter in kg (Calligraphy: ``tool_mass``)."""
-    named = [p for p in task.params if p.name == "object_mass"]
-    in_kg = named or [p for p in task.params if p.unit == "kg"]
-    if not in_kg:
+    parameter in kg (Calligraphy: ``tool_mass``), the one ``impact-eval --mass-bins`` draws
+    (``bins.mass_param_name``; on Disturbance with ``--param object_mass``)."""
+    name = mass_param_name(task.params)
+    if name is None:
         raise InvalidArgumentError(f"{task.name} has no mass parameter; valid parameters: "
                                    f"{', '.join(p.name for p in task.params)}")
-    return in_kg[0]
+    return next(p for p in task.params if p.name == name)
 
 
 @dataclass(frozen=True)

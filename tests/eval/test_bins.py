@@ -155,3 +155,84 @@ def test_reproduce_reruns_a_bin_table_from_its_recorded_bins(tmp_path: Path) -> 
                  "--out", str(tmp_path / "again")]) == 0
     assert ((tmp_path / "again" / "episodes.csv").read_bytes()
             == (tmp_path / "run" / "episodes.csv").read_bytes())
+
+
+# --- issue 53: a bin draws the env's mass only; bin text is quoted as typed ---------------
+
+
+def test_every_task_bins_the_one_mass_both_tools_draw() -> None:
+    """For every built-in task and each of its parameters, a bin is accepted exactly on the
+    mass the LeRobot plugin's ``mass_bin`` draws (``mass_param``) and ``drawn_mass_kg``
+    records; any other parameter is refused naming its own unit, never kg for newtons."""
+    from impact_envs import ENV_IDS
+    from impact_envs.tasks.registry import task_class
+    from impact_eval.bins import check_bin_param, mass_param_name
+    from impact_lerobot.settings import mass_param
+
+    for env_id in ENV_IDS:
+        task = task_class(env_id)
+        mass = mass_param(task).name
+        assert mass_param_name(task.params) == mass
+        for p in task.params:
+            if p.name == mass:
+                check_bin_param(env_id, p.name, task.params)
+                continue
+            with pytest.raises(InvalidArgumentError) as err:
+                check_bin_param(env_id, p.name, task.params)
+            text = str(err.value)
+            assert "\n" not in text and f"--param {mass} with --mass-bins" in text
+            assert f"not {p.name} ({'in ' + p.unit if p.unit else 'without a unit'}" in text
+
+
+@pytest.mark.parametrize("extra, named", [
+    ((), "not disturbance_n (in N)"),  # the issue's push in newtons
+    (("--param", "added_mass"), "not added_mass (in kg, not the mass drawn_mass_kg records)"),
+    (("--param", "disturbance_n", "--mass-bins", "0-1"), "not disturbance_n (in N)"),
+])
+def test_a_bin_of_the_push_or_another_mass_is_one_line_and_writes_nothing(
+        tmp_path: Path, capsys, extra: tuple[str, ...], named: str) -> None:
+    argv = ["--env", "IMPACT/Disturbance-v1", "--method", "scripted_impact", "--mass-bins",
+            "10-30", "--episodes", "1", "--workers", "1", "--out", str(tmp_path / "out")]
+    if "--mass-bins" in extra:
+        argv[argv.index("--mass-bins") + 1] = extra[-1]
+        extra = extra[:2]
+    assert _exit_code([*argv, *extra]) == 2
+    err = capsys.readouterr().err
+    assert named in err and "--param object_mass with --mass-bins" in err
+    assert err.strip().count("\n") == 0 and not (tmp_path / "out").exists()
+
+
+def test_calligraphy_friction_bins_are_refused_in_the_api_too(tmp_path: Path) -> None:
+    with pytest.raises(InvalidArgumentError, match="not surface_friction \\(without a unit\\)"):
+        evaluate(lambda _id, _env: FakePolicy(0.9), "IMPACT/Calligraphy-v1", [(0.1, 0.3)],
+                 tmp_path / "api",
+                 episodes=1, param="surface_friction")
+    assert not (tmp_path / "api").exists()
+
+
+@pytest.mark.parametrize("text, edges", [
+    ("0.00001-5", ((1e-05, 5.0),)),  # the issue's case
+    ("0.1-0.3,0.3-0.0000005", None),  # reversed: its own text, not 5e-07
+    ("0.00002-0.5,0.3-4", None),  # overlapping: both items as typed
+    ("1e-5-5", None),  # an exponent's minus: not LO-HI, with the fixed-point hint
+])
+def test_bin_text_round_trips_and_errors_quote_it_as_typed(text: str, edges) -> None:
+    from impact_eval.spec import SweepSpec, values_from_text
+
+    if edges is None:
+        with pytest.raises(InvalidArgumentError) as err:
+            values_from_text(None, text)
+        message = str(err.value)
+        assert f"--mass-bins {text!r}" in message and "e-0" not in message
+        assert "\n" not in message
+        if text.startswith("1e"):
+            assert "fixed point, e.g. 0.00001" in message
+        return
+    values, highs = values_from_text(None, text)
+    assert tuple(zip(values, highs, strict=True)) == edges
+    spec = SweepSpec("IMPACT/Hammer-v1", ("scripted",), values, highs)
+    again = spec.to_argv()[spec.to_argv().index("--mass-bins") + 1]
+    assert again == "0.00001-5.0" and parse_bins(again) == spec.bins  # reproduce reruns it
+    from impact_eval.api import grid_or_bins
+
+    assert grid_or_bins([(0.00001, 5)]) == (None, "0.00001-5.0")

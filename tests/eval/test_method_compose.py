@@ -56,6 +56,10 @@ def test_parts_map_to_the_spec() -> None:
     ("dp.vanilla+impact+warm+warm", "a flag repeats"),
     ("dp.vanilla+impact+warm+carry", "carry and warm exclude each other"),
     ("dp.vanilla+", "invalid controller ''"),
+    ("scripted+impact@", "invalid preset ''; valid choices: default, paper"),  # issue 53
+    ("dp.vanilla+impact@+carry", "invalid preset ''; valid choices: default, paper"),
+    ("scripted+impedance+warm", "valid: warm on the impact controller"),
+    ("dp.nominal+impedance@paper+warm", "the impedance controller does not have"),
 ])
 def test_a_bad_composition_is_one_line_naming_the_choices(name: str, named: str) -> None:
     with pytest.raises(InvalidArgumentError) as info:
@@ -87,3 +91,20 @@ def test_a_composed_method_gives_its_shortcuts_rows(tmp_path: Path) -> None:
     composed = rows[rows["method"] == "scripted+impact@paper"].drop(columns="method")
     assert len(short) == 2
     pd.testing.assert_frame_equal(short.reset_index(drop=True), composed.reset_index(drop=True))
+
+
+@pytest.mark.parametrize(("method", "named"), [
+    ("scripted+impact@", "invalid preset ''; valid choices: default, paper, authors_sim"),
+    ("scripted+impedance+warm", "valid: warm on the impact controller"),
+])
+def test_an_empty_preset_or_a_cold_warm_flag_stops_the_cli_before_anything_is_written(
+        tmp_path: Path, capsys: pytest.CaptureFixture, method: str, named: str) -> None:
+    """Issue 53: neither means something else silently (``default``; a warm-up that warms
+    nothing): one line, exit 2, no output directory."""
+    from fixtures.eval_fake import ENV_ID
+
+    code = main(["--env", ENV_ID, "--method", f"fake_fast,{method}", "--masses", "0.5",
+                 "--episodes", "1", "--workers", "1", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and named in err and err.strip().count("\n") == 0
+    assert not (tmp_path / "out").exists()

@@ -81,3 +81,47 @@ def test_evaluate_takes_the_same_settings(tmp_path: Path) -> None:
     with pytest.raises(InvalidArgumentError, match="valid: a list of 'FIELD=VALUE' strings"):
         evaluate(lambda _id, _env: FakePolicy(0.9), ENV_ID, [0.5], tmp_path / "x",
                  robot_set="realism=fr3")
+
+
+# --- issue 53: an override may not undo a method's own flag -----------------------------
+
+
+@pytest.mark.parametrize(("method", "setting"), [
+    ("scripted_impact_authors", "torque_reading=link_side"),  # the issue's case
+    ("impact_authors", "torque_reading=link_side"),
+    ("scripted+impact@paper+commanded", "torque_reading=link_side"),  # composed (variation)
+])
+def test_a_robot_set_that_undoes_a_flag_is_refused_naming_both(tmp_path: Path, capsys,
+                                                              method: str,
+                                                              setting: str) -> None:
+    argv = _args(tmp_path / "out", "--robot-set", "realism=fr3", "--robot-set", setting)
+    argv[argv.index("--method") + 1] = f"fake_fast,{method}"
+    assert _exit_code(argv) == 2
+    err = capsys.readouterr().err
+    assert f"--robot-set {setting!r} contradicts method {method!r}'s +commanded" in err
+    assert "torque_reading='commanded'" in err and err.strip().count("\n") == 0
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("settings", [
+    ("torque_reading=commanded",),  # the flag's own value
+    ("realism=fr3", "delay_ticks=0"),  # other fields (the realism tables)
+    ("torque_reading=link_side", "torque_reading=commanded"),  # the last one wins: the flag's
+])
+def test_overrides_that_keep_the_flags_pass(settings: tuple[str, ...]) -> None:
+    from impact_eval.methods import check_overrides_keep_flags, resolve_method
+
+    for name in ("impact_authors", "scripted_impact_authors", "scripted_impact", "impact_warm"):
+        check_overrides_keep_flags(resolve_method(name), settings)
+    # a method without the flag may take any reading: it has none to undo
+    check_overrides_keep_flags(resolve_method("scripted_impact"), ("torque_reading=link_side",))
+
+
+def test_a_controller_set_on_the_authors_method_still_runs_and_is_recorded() -> None:
+    """docs/results.md §5's nullspace override on ``impact_authors``: checked, accepted."""
+    from impact_eval.spec import SweepSpec
+
+    spec = SweepSpec("IMPACT/Hammer-v1", ("impact_authors",), (0.5,),
+                     controller_overrides=("impedance.nullspace_stiffness_nm_per_rad=10",))
+    assert spec.to_argv()[-2:] == ["--controller-set",
+                                   "impedance.nullspace_stiffness_nm_per_rad=10"]
