@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from impact_control.errors import InvalidArgumentError
-from impact_eval.grid import GRID_DECIMALS
+from impact_eval.grid import GRID_DECIMALS, plain_number
 
 MASS_PARAM = "object_mass"
 """The mass a bin draws where the env declares it (else its first parameter in kg); the
@@ -101,12 +101,10 @@ def check_bins(bins: tuple[MassBin, ...]) -> None:
 
 
 def edge_text(value: float) -> str:
-    """A bin edge as ``--mass-bins`` text that ``parse_bins`` reads back to the same number:
-    its ``repr``, or fixed-point where that has an exponent (``1e-05``'s ``-`` would split)."""
-    text = repr(float(value))
-    if "e" not in text:
-        return text
-    return f"{value:.{GRID_DECIMALS}f}".rstrip("0").rstrip(".")
+    """A bin edge as ``--mass-bins`` text that ``parse_bins`` reads back to the same number
+    (``grid.plain_number``: fixed point where the ``repr`` has an exponent, whose ``-`` would
+    split the bin)."""
+    return plain_number(value)
 
 
 def format_bins(bins: tuple[MassBin, ...]) -> str:

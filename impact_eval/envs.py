@@ -13,6 +13,7 @@ import numpy as np
 
 from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_envs.versions import check_not_retired
+from impact_eval.grid import plain_number
 
 DEFAULT_PARAM_NAME = "object_mass"
 """Parameter swept when the env does not declare ``param_name``."""
@@ -177,9 +178,10 @@ def probe_values(env: gym.Env, param_name: str, values: Sequence[float]) -> None
         try:
             _, info = env.reset(seed=0, options={param_name: value})
         except Exception as exc:  # noqa: BLE001 - a rejected value is bad input
-            msg = " ".join(str(exc).split())[:160]
+            shown = plain_number(value)  # as typed: 0.00001, not 1e-05
+            msg = " ".join(str(exc).split())[:160].replace(f"={float(value)!r}", f"={shown}")
             raise InvalidArgumentError(
-                f"{param_name}={value} rejected by {env.spec.id if env.spec else env}: {msg}"
+                f"{param_name}={shown} rejected by {env.spec.id if env.spec else env}: {msg}"
             ) from None
         reported = info.get(param_name)
         if reported is not None and not math.isclose(

@@ -83,6 +83,15 @@ def parse_grid(spec: str) -> list[float]:
     return values
 
 
+def plain_number(value: float) -> str:
+    """``value`` as a user types it, for messages and argument text: its ``repr``, or fixed
+    point where that has an exponent (``0.00001``, not ``1e-05``)."""
+    text = repr(float(value))
+    if "e" not in text:
+        return text
+    return f"{value:.{GRID_DECIMALS}f}".rstrip("0").rstrip(".")
+
+
 def format_value(value: float) -> str:
     """Canonical text of a grid value, used as the CSV cell and the resume key (``repr``)."""
     return repr(round(float(value), GRID_DECIMALS))

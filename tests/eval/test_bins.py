@@ -236,3 +236,16 @@ def test_bin_text_round_trips_and_errors_quote_it_as_typed(text: str, edges) -> 
     from impact_eval.api import grid_or_bins
 
     assert grid_or_bins([(0.00001, 5)]) == (None, "0.00001-5.0")
+
+
+@pytest.mark.parametrize("args", [["--mass-bins", "0.00001-5"], ["--masses", "0.00002,5"]])
+def test_a_value_the_env_refuses_is_named_as_typed_not_as_a_float_repr(
+        args: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from impact_eval.cli import main
+
+    code = main(["--env", "IMPACT/Hammer-v1", "--method", "scripted", *args, "--episodes", "1",
+                 "--out", str(tmp_path / "out")])
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert "out of range" in err and "e-05" not in err and "\n" not in err
+    assert "=0.0000" in err and not (tmp_path / "out").exists()
