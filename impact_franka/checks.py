@@ -12,16 +12,15 @@ Both raise ``InvalidArgumentError``, which the CLI turns into exit 2.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import ipaddress
 import math
-import os
 import re
 from collections.abc import Callable
 from pathlib import Path
 
 from impact_control.errors import InvalidArgumentError
 from impact_franka.pick_place import Pose
+from impact_franka.writable import try_writing
 
 MAX_SECONDS = 600.0
 """Longest run [s]: every 1 ms tick is kept in memory until the run ends (measured 600 B
@@ -164,22 +163,3 @@ def check_out(out: Path) -> None:
         where = exc.filename or out
         raise InvalidArgumentError(f"invalid --out {out}: cannot create {where} "
                                    f"({exc.strerror or exc}); {valid}") from None
-
-
-def try_writing(out: Path) -> None:
-    """Create ``out`` (with its missing parents) and a file in it, then remove all of it;
-    ``OSError`` (its ``filename`` the path that could not be created) if that fails."""
-    absolute = out.absolute()
-    missing = [p for p in (absolute, *absolute.parents) if not p.exists()]
-    created: list[Path] = []
-    try:
-        for folder in reversed(missing):
-            folder.mkdir()
-            created.append(folder)
-        probe = absolute / f".impact-robot-probe-{os.getpid()}"
-        probe.open("x").close()
-        probe.unlink()
-    finally:
-        for folder in reversed(created):
-            with contextlib.suppress(OSError):
-                folder.rmdir()

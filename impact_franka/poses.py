@@ -24,6 +24,7 @@ import numpy as np
 from impact_control.errors import InvalidArgumentError
 from impact_franka.fci import FrankaError
 from impact_franka.pick_place import Pose
+from impact_franka.writable import try_writing
 
 SHOULDER_M = np.array([0.0, 0.0, 0.333])
 """The FR3's shoulder (joint 2's axis) in the base frame [m]."""
@@ -85,8 +86,6 @@ def check_writable(path: Path, name: str | None = None, replace: bool = True) ->
     """Before anything moves: a pose can be saved at ``path`` (its directory exists and is
     writable; an existing file is a writable file of valid taught poses), and ``name`` is new
     there unless ``replace``. ``InvalidArgumentError`` (one line) otherwise."""
-    from impact_franka.checks import try_writing
-
     folder = path.parent if str(path.parent) else Path(".")
     valid = "valid: a file in a writable directory"
     if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):

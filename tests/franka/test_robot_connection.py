@@ -213,7 +213,7 @@ time.sleep(120)
 """
 """A probe child that never answers and ignores the signals sent to the command."""
 DRIVER = """
-import contextlib, os, sys, types
+import contextlib, os, signal, sys, types
 from impact_franka import commands, connection
 from impact_franka.cli import main
 sys.modules.setdefault("pylibfranka", types.ModuleType("pylibfranka"))  # never called
@@ -231,6 +231,7 @@ def watched(host):
             print("probe alive at release:", os.path.exists(f"/proc/{pid}"), flush=True)
 
 commands.client_lock = watched
+signal.signal(signal.SIGINT, signal.default_int_handler)  # pytest-xdist's workers ignore it
 raise SystemExit(main(sys.argv[3:]))
 """
 """``impact-robot`` with the stuck probe, reporting whether the probe's child still existed
@@ -287,9 +288,13 @@ def test_an_interrupted_probe_call_kills_and_reaps_its_child(tmp_path) -> None:
             time.sleep(0.02)
         signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
 
-    threading.Thread(target=interrupt, daemon=True).start()
-    with pytest.raises(KeyboardInterrupt):
-        probe("192.0.2.1", 60.0, program)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # xdist ignores it
+    try:
+        threading.Thread(target=interrupt, daemon=True).start()
+        with pytest.raises(KeyboardInterrupt):
+            probe("192.0.2.1", 60.0, program)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     child = int(pid_file.read_text())
     alive = Path(f"/proc/{child}").exists()
     if alive:
