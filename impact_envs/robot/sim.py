@@ -28,6 +28,7 @@ from impact_envs.robot.sim_kernels import (
     contact_sums,
     count_body_contacts,
     link_torque,
+    push_into_robot_contact,
     send,
     sense,
     state_status,
@@ -399,6 +400,18 @@ class FrankaSim:
             return 0.0, 0.0
         con = d.contact
         return contact_sums(ncon, con.geom, con.efc_address, d.efc_force, self.geom_group)
+
+    def push_into_contact(self, force_world_n: np.ndarray) -> float:
+        """The part [N] of a force on the robot (3,) [N, world frame] that pushes toward the
+        environment along the robot-environment contact normal (``push_into_robot_contact``:
+        the direction of the environment's net normal force on the robot); 0 without such a
+        contact. Negative: it pulls away."""
+        d = self.data
+        if d.ncon == 0:
+            return 0.0
+        con = d.contact
+        return push_into_robot_contact(d.ncon, con.geom, con.efc_address, d.efc_force,
+                                       con.frame, self.geom_group, force_world_n)
 
     def object_finger_contacts(self, object_body: str) -> int:
         """Number of finger-pad contacts touching ``object_body`` (privileged grasp check)."""
