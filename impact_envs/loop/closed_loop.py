@@ -26,6 +26,11 @@ from impact_envs.robot.sim import FrankaSim
 CONTACT_EVERY = 4
 """Contact forces are sampled every 4th tick and on a step's last one."""
 
+FF_PUSH_FROM_N = 10.0
+"""The feedforward's push into the robot's contact (``StepTrace.ff_into_contact_n``) is
+computed only where that contact exceeds this [N] (0 elsewhere; the diagnostic that reads it
+counts contacts above 20 N)."""
+
 
 class StepTrace(NamedTuple):
     """What one policy step's ticks leave: per-tick ``taus`` (n, 7) [Nm] and ``qvels`` (n, 7)
@@ -33,9 +38,10 @@ class StepTrace(NamedTuple):
     the robot and on the objects (``FrankaSim.contact_forces``), and both forces per tick
     ``contact_robot_n`` / ``contact_object_n`` (n,) [N], each sample held over the ticks
     since the previous one (sampled every ``CONTACT_EVERY`` ticks and on the last), and
-    ``ff_into_contact_n`` (n,) [N], sampled with them: how hard the controller's force
-    feedforward pushes toward the environment along the robot-environment contact normal
-    (``FrankaSim.push_into_contact``; 0 without robot contact)."""
+    ``ff_into_contact_n`` (n,) [N], sampled with them: how hard the controller's feedforward
+    wrench pushes the robot into the environment along the robot-environment contact normal
+    (``FrankaSim.push_into_contact``; 0 where the robot's contact is at most
+    ``FF_PUSH_FROM_N``)."""
 
     taus: np.ndarray
     qvels: np.ndarray
@@ -117,7 +123,7 @@ class ClosedLoop:
         bundle, tick = self._entries(parts, friction)
         args = bundle(*parts)
         contact = np.empty((n, 3))  # robot, object, feedforward into the robot's contact
-        ff_force = ctrl.tick.wrench_ff[:3]  # a view: this tick's applied feedforward
+        ff = ctrl.tick.wrench_ff  # a view: this tick's applied feedforward
         last = 0
         hook, data = self.tick_hook, sim.data
         for i in range(n):
@@ -129,7 +135,7 @@ class ClosedLoop:
             sim.step()
             if (i + 1) % CONTACT_EVERY == 0 or i == n - 1:
                 robot, obj = sim.contact_forces()
-                push = sim.push_into_contact(ff_force) if robot > 0.0 else 0.0
+                push = sim.push_into_contact(ff) if robot > FF_PUSH_FROM_N else 0.0
                 contact[last:i + 1] = robot, obj, push
                 last = i + 1
         sim.check_finite()

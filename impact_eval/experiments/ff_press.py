@@ -1,8 +1,9 @@
 """``python -m impact_eval.experiments.ff_press``: the controller-attributed press (issue 54)
 on given episodes, paired with a table's rows.
 
-For each method and each episode it runs one rollout (as ``experiments.trace`` does: the
-episode's seed, its parameter value, the DP's sampling noise from the seed) and writes a row
+For each method it runs each cell's episodes in lockstep, as one ``impact-eval`` worker task
+does (``rollout.LockstepBatch``: the same seeds, batch and DP noise, so on the same CPU the
+rows equal ``impact-eval``'s) and writes a row per episode
 with the outcome, ``contact_over_20n_s`` and ``peak_contact_sustained_n`` (as in
 ``episodes.csv``) and the two diagnostic columns of ``safety.FF_PRESS_COLUMNS``: the time
 during which the robot-environment normal force exceeds 20 N **and** the force feedforward
@@ -14,7 +15,7 @@ Episodes come either from a table's rows (``--pairs-from DIR/episodes.csv --pair
 --values-from LO --values-to HI``: each row's value, seed, episode and drawn mass, so the
 rows pair with the table's) or from a grid (``--values 9,10 --episodes 10 --seed 101``, the
 paired seeds of ``impact-eval`` for those values in that order). Rows are appended to
-``--out`` as they finish; a rerun skips the (method, value, episode) rows already there.
+``--out`` cell by cell; a rerun skips the (method, value, episode) rows already there.
 
     python -m impact_eval.experiments.ff_press --env IMPACT/Hammer-v1 \\
         --methods impact,dp.vanilla+impact@lift_watch \\
@@ -33,12 +34,8 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from impact_control.errors import ImpactError, InvalidArgumentError
-from impact_control.policy import stack_obs
 from impact_eval.grid import episode_seed, parse_grid
-from impact_eval.metrics import EpisodeTracker
 from impact_eval.safety import FF_PRESS_COLUMNS
 
 COLUMNS: tuple[str, ...] = ("method", "env_id", "param_value", "reset_value", "seed",
@@ -46,57 +43,60 @@ COLUMNS: tuple[str, ...] = ("method", "env_id", "param_value", "reset_value", "s
                             "peak_contact_sustained_n", *FF_PRESS_COLUMNS)
 
 
+Episode = tuple[float, float, int, int]
+"""(value, reset value, seed, episode index)."""
+
+
 @dataclass(frozen=True)
-class Job:
-    """One rollout: method, env, the row's value, the value the env is reset with (a bin's
-    drawn mass), seed, episode and ``--controller-set`` overrides."""
+class Cell:
+    """One cell's episodes, run in lockstep as one ``impact-eval`` worker task runs them (one
+    batch, so the batched policy's numerics match the table's rows on the same CPU): method,
+    env, ``--controller-set`` overrides, and per episode (value, reset value, seed, index)."""
 
     method: str
     env_id: str
-    value: float
-    reset_value: float
-    seed: int
-    episode: int
-    overrides: tuple[str, ...] = ()
+    overrides: tuple[str, ...]
+    episodes: tuple[Episode, ...]
 
 
-def run_job(job: Job) -> dict[str, object]:
-    """One episode of ``job``; its row (``COLUMNS``)."""
+def run_cell(cell: Cell) -> list[dict[str, object]]:
+    """The rows (``COLUMNS``) of ``cell``'s episodes."""
     from impact_eval.envs import describe_env, make_env
     from impact_eval.methods import resolve_method
+    from impact_eval.rollout import EpisodeJob, LockstepBatch
 
-    spec = resolve_method(job.method)
-    env = make_env(job.env_id, spec.controller, job.overrides, spec.preset, robot=spec.robot)
-    policy = spec.build(job.env_id, env)
-    obs, info = env.reset(seed=job.seed, options={describe_env(env).param_name: job.reset_value})
-    policy.reset(1)
-    if hasattr(policy, "seed_envs"):
-        policy.seed_envs([job.seed])
-    tracker = EpisodeTracker(policy_dt=float(env.unwrapped.policy_dt))
-    tracker.start(info)
-    done = False
-    while not done:
-        obs, _, terminated, truncated, info = env.step(np.asarray(policy.act(stack_obs([obs]))[0]))
-        tracker.update(info)
-        done = terminated or truncated
-    tracker.finish("terminated" if terminated else "timeout")
-    env.close()
-    row = tracker.row()
-    return {"method": job.method, "env_id": job.env_id, "param_value": job.value,
-            "reset_value": job.reset_value, "seed": job.seed, "episode": job.episode,
-            "success": row["success"], "length": row["length"],
-            "contact_over_20n_s": row["contact_over_20n_s"],
-            "peak_contact_sustained_n": row["peak_contact_sustained_n"], **tracker.ff_press()}
+    spec = resolve_method(cell.method)
+    envs = [make_env(cell.env_id, spec.controller, cell.overrides, spec.preset,
+                     robot=spec.robot) for _ in cell.episodes]
+    described = describe_env(envs[0])
+    batch = LockstepBatch(envs, spec.build(cell.env_id, envs[0]), described.param_name,
+                          described.policy_dt)
+    batch.with_ff_press = True
+    jobs = [EpisodeJob(value, seed, episode, reset) for value, reset, seed, episode
+            in cell.episodes]
+    rows: list[dict[str, object]] = []
+
+    def on_finish(i: int, columns: dict[str, object]) -> None:
+        job = jobs[i]
+        rows.append({"method": cell.method, "env_id": cell.env_id, "param_value": job.value,
+                     "reset_value": job.reset_value, "seed": job.seed,
+                     "episode": job.episode, **{c: columns[c] for c in COLUMNS[6:]}})
+
+    batch.run(jobs, on_finish)
+    for env in envs:
+        env.close()
+    return sorted(rows, key=lambda r: r["episode"])  # type: ignore[arg-type, return-value]
 
 
-def pairs_from(path: Path, method: str, lo: float, hi: float) -> list[tuple[float, float, int, int]]:
+def pairs_from(path: Path, method: str, lo: float, hi: float) -> list[Episode]:
     """(value, reset value, seed, episode) of ``method``'s rows of a table with ``lo <=
     value <= hi`` (the reset value is the drawn mass of a bin row, else the value)."""
     try:
         with path.open(newline="") as f:
             rows = [r for r in csv.DictReader(f) if r.get("method") == method]
     except OSError as exc:
-        raise InvalidArgumentError(f"cannot read --pairs-from {str(path)!r}: {exc.strerror}") from None
+        raise InvalidArgumentError(
+            f"cannot read --pairs-from {str(path)!r}: {exc.strerror}") from None
     out = []
     for r in rows:
         value = float(r["param_value"])
@@ -110,8 +110,7 @@ def pairs_from(path: Path, method: str, lo: float, hi: float) -> list[tuple[floa
     return out
 
 
-def grid_pairs(values: Sequence[float], episodes: int, seed: int
-               ) -> list[tuple[float, float, int, int]]:
+def grid_pairs(values: Sequence[float], episodes: int, seed: int) -> list[Episode]:
     """impact-eval's paired episodes of a grid (``grid.episode_seed``)."""
     return [(v, v, episode_seed(seed, i, e), e) for i, v in enumerate(values)
             for e in range(episodes)]
@@ -125,27 +124,29 @@ def _done(out: Path) -> set[tuple[str, float, int]]:
                 for r in csv.DictReader(f)}
 
 
-def run(jobs: Sequence[Job], out: Path, workers: int) -> None:
-    """Run the jobs not yet in ``out``, appending each row as it finishes."""
+def run(cells: Sequence[Cell], out: Path, workers: int) -> None:
+    """Run the episodes not yet in ``out``, cell by cell, appending each cell's rows as it
+    finishes."""
     done = _done(out)
-    todo = [j for j in jobs if (j.method, j.value, j.episode) not in done]
+    todo = [Cell(c.method, c.env_id, c.overrides,
+                 tuple(e for e in c.episodes if (c.method, e[0], e[3]) not in done))
+            for c in cells]
+    todo = [c for c in todo if c.episodes]
     out.parent.mkdir(parents=True, exist_ok=True)
     new = not out.exists()
     with out.open("a", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=COLUMNS)
         if new:
             writer.writeheader()
-        if workers == 1:
-            results = map(run_job, todo)
-        else:
-            pool = ProcessPoolExecutor(workers)
-            results = pool.map(run_job, todo)
-        for row in results:
-            writer.writerow(row)
+        pool = ProcessPoolExecutor(workers) if workers > 1 else None
+        results = pool.map(run_cell, todo) if pool is not None else map(run_cell, todo)
+        for rows in results:
+            writer.writerows(rows)
             f.flush()
-            print(f"{row['method']} {row['param_value']} ep {row['episode']}: success "
-                  f"{row['success']}, >20 N {row['contact_over_20n_s']:.2f} s, ff press "
-                  f"{row['ff_press_over_20n_s']:.2f} s", flush=True)
+            first = rows[0]
+            print(f"{first['method']} {first['param_value']}: {len(rows)} episodes, "
+                  f"{sum(int(r['success']) for r in rows)} successes, ff press above 0.5 s in "
+                  f"{sum(r['ff_press_over_20n_s'] > 0.5 for r in rows)}", flush=True)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -176,9 +177,11 @@ def main(argv: list[str] | None = None) -> None:
                                args.values_to)
         else:
             pairs = grid_pairs(parse_grid(args.values), args.episodes, args.seed)
-        jobs = [Job(m, args.env, v, r, s, e, tuple(args.controller_set))
-                for m in args.methods.split(",") for v, r, s, e in pairs]
-        run(jobs, args.out, args.workers)
+        values = sorted({p[0] for p in pairs})
+        cells = [Cell(m, args.env, tuple(args.controller_set),
+                      tuple(p for p in pairs if p[0] == v))
+                 for m in args.methods.split(",") for v in values]
+        run(cells, args.out, args.workers)
     except ImpactError as exc:
         print(f"{p.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise SystemExit(2) from None

@@ -10,6 +10,7 @@ from fixtures.rollouts import expert_rollout
 from impact_control.errors import InvalidArgumentError
 from impact_envs import ENV_IDS
 from impact_envs.loop import ClosedLoop, StepTrace, TickTargets
+from impact_envs.loop.closed_loop import FF_PUSH_FROM_N
 from impact_envs.tasks.base import Task
 
 
@@ -37,7 +38,8 @@ class _ReferenceLoop:
             taus[i], qvels[i] = sim.tau_applied, sim.arm_state()[1]
             if (i + 1) % 4 == 0 or i == n - 1:
                 robot, obj = sim.contact_forces()
-                push = sim.push_into_contact(ctrl.signals.wrench_ff_world[:3])
+                push = (sim.push_into_contact(ctrl.signals.wrench_ff_world)
+                        if robot > FF_PUSH_FROM_N else 0.0)
                 contact[last:i + 1], last = (robot, obj, push), i + 1
         sim.check_finite()
         peaks = np.maximum(contact[:, :2].max(axis=0), 0.0)
