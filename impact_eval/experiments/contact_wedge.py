@@ -74,6 +74,9 @@ def main(argv: list[str] | None = None) -> None:
             obs, *_ = env.step(np.asarray(policy.act(stack_obs([obs]))[0]))
         sim = env.unwrapped.sim
         print("\n".join(contact_lines(sim.model, sim.data, args.body)))
+        robot, _ = sim.contact_forces()
+        print(f"robot-environment normal force: {robot:.1f} N; gripper opening "
+              f"{sim.gripper_width() * 1000:.0f} mm")
     except ImpactError as exc:
         print(f"{p.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise SystemExit(2) from None
