@@ -149,11 +149,54 @@ def run(cells: Sequence[Cell], out: Path, workers: int) -> None:
                   f"{sum(r['ff_press_over_20n_s'] > 0.5 for r in rows)}", flush=True)
 
 
+def mcnemar_p(b: int, c: int) -> float:
+    """Two-sided exact McNemar p-value of ``b`` and ``c`` discordant pairs (binomial, 1/2)."""
+    n, k = b + c, min(b, c)
+    if n == 0:
+        return 1.0
+    tail = sum(math.comb(n, i) for i in range(k + 1)) / 2.0**n
+    return min(1.0, 2.0 * tail)
+
+
+def summary(path: Path, baseline: str, candidate: str) -> list[str]:
+    """Per value: successes of ``baseline`` and ``candidate`` on the same episodes, the pairs
+    only one of them won, the failed episodes' longest time above 20 N and the longest ff
+    press; then the pooled counts with the exact McNemar p-value."""
+    with path.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    by = {(r["method"], float(r["param_value"]), int(r["episode"])): r for r in rows}
+    lines = [f"value | {baseline} | {candidate} | only {baseline} | only {candidate} | "
+             "failed > 20 N, longest [s] (each) | ff press, longest [s] (each)"]
+    pooled = [0, 0, 0, 0]
+    for value in sorted({k[1] for k in by}):
+        pairs = [(by[k], by.get((candidate, value, k[2]))) for k in sorted(by)
+                 if k[0] == baseline and k[1] == value]
+        pairs = [(a, b) for a, b in pairs if b is not None]
+        wins = [(int(a["success"]), int(b["success"])) for a, b in pairs]
+        counts = [sum(x for x, _ in wins), sum(y for _, y in wins),
+                  sum(x > y for x, y in wins), sum(y > x for x, y in wins)]
+        pooled = [p + c for p, c in zip(pooled, counts, strict=True)]
+
+        def longest(column: str, failed: bool, side: int, chosen=pairs) -> str:
+            vals = [float(pair[side][column]) for pair in chosen
+                    if not failed or pair[side]["success"] == "0"]
+            return f"{max(vals):.2f}" if vals else "-"
+
+        lines.append(f"{value:g} | {counts[0]}/{len(pairs)} | {counts[1]}/{len(pairs)} | "
+                     f"{counts[2]} | {counts[3]} | {longest('contact_over_20n_s', True, 0)} / "
+                     f"{longest('contact_over_20n_s', True, 1)} | "
+                     f"{longest('ff_press_over_20n_s', False, 0)} / "
+                     f"{longest('ff_press_over_20n_s', False, 1)}")
+    lines.append(f"pooled: {pooled[0]} vs {pooled[1]}; only {baseline} {pooled[2]}, only "
+                 f"{candidate} {pooled[3]}; exact McNemar p = {mcnemar_p(*pooled[2:]):.3g}")
+    return lines
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point."""
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--env", default="IMPACT/Hammer-v1")
-    p.add_argument("--methods", required=True, help="comma list of impact-eval methods")
+    p.add_argument("--methods", default="", help="comma list of impact-eval methods")
     p.add_argument("--pairs-from", type=Path, help="a table's episodes.csv")
     p.add_argument("--pairs-method", help="whose rows of --pairs-from give the episodes")
     p.add_argument("--values-from", type=float, default=-math.inf)
@@ -165,8 +208,14 @@ def main(argv: list[str] | None = None) -> None:
                    metavar="SECTION.FIELD=VALUE")
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--summary", metavar="BASELINE,CANDIDATE",
+                   help="print the paired summary of --out's rows for two methods and exit")
     args = p.parse_args(argv)
     try:
+        if args.summary:
+            baseline, _, candidate = args.summary.partition(",")
+            print("\n".join(summary(args.out, baseline, candidate)))
+            return
         if args.workers < 1 or args.episodes < 1:
             raise InvalidArgumentError("--workers and --episodes must be >= 1")
         if (args.pairs_from is None) == (args.values is None):
