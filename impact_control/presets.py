@@ -32,8 +32,8 @@ LIFT_WATCH: dict[str, str] = {
     "saturation_release.spare_carried": "True",
 }
 """Fields where ``lift_watch`` differs from ``default`` (issue 54: a learned load is fed
-forward only while the arm carries it; ``saturation_release.py``, "Lift watch"; chosen and
-ablated in docs/controller.md, "Lift watch")."""
+forward only while the arm carries it; ``saturation_release.py``, "Lift watch"). Experimental,
+not adopted: its reference-seed check loses lifts (docs/controller.md, "Lift watch")."""
 ROBOT_PRESETS: tuple[str, ...] = tuple(name for name in PRESETS if name not in SIM_ONLY)
 """The presets that may run on a real FR3 (``impact-robot --preset``): all but
 ``SIM_ONLY``'s."""
