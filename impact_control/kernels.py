@@ -250,7 +250,8 @@ def controller_tick(
         _feedforward(pred, wrench_cmd, mask, guard, tick)  # w_ff, w_ff + w_cmd
     if saturation_release_on(opt):  # w_ff scaled down while a joint stays at its bound
         saturation_release_step(lim.output, lim.params.tau_max, dyn.pos_ee_world[2],
-                                tick.wrench_ff, tick.wrench_cmd, tick.wrench_extra,
+                                optional_payload(opt).gripper_cmd[0], tick.wrench_ff,
+                                tick.wrench_cmd, tick.wrench_extra,
                                 optional_saturation_release(opt))
     wrench_map_null = estimator_map if par.maps_shared else tick.projector_map
     impedance_law(dyn, q, dq, pos_t, quat_t, wrench_map_null, tick.wrench_extra, imp)

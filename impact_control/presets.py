@@ -1,4 +1,5 @@
-"""Named controller presets: ``"default"`` (the shipped configuration), ``"paper"``, and the
+"""Named controller presets: ``"default"`` (the shipped configuration), ``"paper"``,
+``"lift_watch"`` (``default`` with the lift watch: ``LIFT_WATCH``), and the
 authors' released controller as it runs in their simulation (``"authors_sim"``) and on their
 robot (``"authors_real"``; ``authors_presets.py``).
 
@@ -23,8 +24,16 @@ from impact_control.config import ControllerConfig
 from impact_control.errors import InvalidArgumentError, check_choice
 from impact_control.overrides import apply_overrides
 
-PRESETS: tuple[str, ...] = ("default", "paper", *AUTHORS_PRESETS)
+PRESETS: tuple[str, ...] = ("default", "paper", "lift_watch", *AUTHORS_PRESETS)
 """Valid preset names."""
+
+LIFT_WATCH: dict[str, str] = {
+    "saturation_release.lift_watch_s": "4.0",
+    "saturation_release.spare_carried": "True",
+}
+"""Fields where ``lift_watch`` differs from ``default`` (issue 54: a learned load is fed
+forward only while the arm carries it; ``saturation_release.py``, "Lift watch"). Experimental,
+not adopted: its reference-seed check loses lifts (docs/controller.md, "Lift watch")."""
 ROBOT_PRESETS: tuple[str, ...] = tuple(name for name in PRESETS if name not in SIM_ONLY)
 """The presets that may run on a real FR3 (``impact-robot --preset``): all but
 ``SIM_ONLY``'s."""
@@ -56,8 +65,10 @@ def preset_config(name: str, estimator: str | None = None) -> ControllerConfig:
                 "observer); valid: an estimator with preset default or paper")
         return authors_config(robot=name == "authors_real")
     config = ControllerConfig()
-    if name != "default":
+    if name == "paper":
         config = revert_departures(config, DEPARTURES)
+    elif name == "lift_watch":
+        config = apply_overrides(config, [f"{k}={v}" for k, v in LIFT_WATCH.items()])
     if estimator is None:
         return config
     return replace(config, estimator=replace(config.estimator, kind=estimator))

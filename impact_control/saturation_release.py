@@ -27,6 +27,20 @@ and ``tau_max`` its bound:
    tick before it computes the next one (``saturation_release_restore``): a masked axis keeps
    its last unmasked value, which must not be scaled twice.
 
+**Lift watch** (``lift_watch_s`` finite; off in ``default``, on in ``carry``, issue 54): the
+load is fed forward only while the arm really carries it. A gripper *close* (the command goes
+from open, <= 0, to closed, > 0) arms it and keeps the TCP's lowest height since (``z_low``).
+The lift is *seen* once the TCP rises ``lift_min_m`` above ``z_low``. Until then, every tick
+on which the unscaled vertical feedforward pushes up with at least ``lift_force_min_n``
+counts; after ``lift_watch_s`` of such ticks without the lift seen, the table (or whatever
+the load rests on) carries it: the lift is *stalled*, and the scale decays toward 0 as in a
+release and stays there until the gripper opens (which disarms the watch) or the TCP rises
+``lift_min_m`` above ``z_low`` after all (the lift seen: the scale recovers). With
+``spare_carried`` the saturation release above does not act once the lift is seen (a load
+the arm has lifted is carried, not let go, while the wrist is at its bound). Only the
+gripper command, the TCP's height and the feedforward are read: what a real FR3 has. An
+episode that starts with the gripper closed (a tool already in the hand) never arms it.
+
 ``enabled=False`` (``paper``, ``authors_sim``, ``authors_real``): the tick never names this
 stage (``optional_stages.py``). ``default``'s values (hold 0.5 s, release 0.25 s, recover 2 s,
 margin 0.1 Nm, rise 10 mm) were chosen on tuning seeds and ablated on the reference seeds
@@ -65,6 +79,15 @@ class SaturationReleaseConfig:
         rise_min_m: The TCP (world z) must rise at least this much over a hold window at the
             bound for the lift to count as progressing, which restarts the window instead of
             releasing [m] (0: never released while the TCP does not fall).
+        lift_watch_s: Lift watch (module docstring): how long the vertical feedforward may
+            push up with at least ``lift_force_min_n`` after a gripper close before the lift
+            must be seen [s] (inf: no lift watch, as in ``default``).
+        lift_min_m: The TCP's rise above its lowest height since the close that counts as
+            the lift seen [m].
+        lift_force_min_n: The upward vertical feedforward [N, world z] from which the lift
+            watch counts time.
+        spare_carried: The saturation release does not act once the lift is seen since the
+            last close (False in ``default``).
     """
 
     enabled: bool = True
@@ -73,8 +96,19 @@ class SaturationReleaseConfig:
     recover_tau_s: float = 2.0
     margin_nm: float = 0.1
     rise_min_m: float = 0.01
+    lift_watch_s: float = math.inf
+    lift_min_m: float = 0.02
+    lift_force_min_n: float = 10.0
+    spare_carried: bool = False
 
     def __post_init__(self) -> None:
+        if not (self.lift_watch_s > 0.0):  # inf allowed: no lift watch
+            raise InvalidArgumentError(
+                f"invalid saturation_release.lift_watch_s {self.lift_watch_s!r}; valid: a "
+                "time > 0 [s], or inf (no lift watch)")
+        check_positive("saturation_release.lift_min_m", self.lift_min_m)
+        check_positive("saturation_release.lift_force_min_n", self.lift_force_min_n,
+                       allow_zero=True)
         check_positive("saturation_release.hold_s", self.hold_s, allow_zero=True)
         check_positive("saturation_release.release_tau_s", self.release_tau_s)
         check_positive("saturation_release.recover_tau_s", self.recover_tau_s)
@@ -100,6 +134,17 @@ class SaturationReleaseState(NamedTuple):
         releases: (1,) ticks on which the release acted (at_bound_ticks >= hold_ticks)
             since reset.
         ff_unscaled: (6,) the feedforward of the last tick before scaling [N, Nm].
+        watch_ticks: (1,) the lift watch in ticks (round(lift_watch_s / dt); inf: off).
+        lift_min_m: (1,) the config's lift threshold [m].
+        lift_force_min_n: (1,) the config's force threshold [N].
+        spare_carried: (1,) 1 when the saturation release spares a seen lift.
+        grip_last: (1,) the gripper command of the last tick (+1 after ``reset``).
+        armed: (1,) 1 from a gripper close until it opens.
+        lifted: (1,) 1 once the lift is seen since the last close.
+        stalled: (1,) 1 while the lift watch releases the feedforward.
+        z_low: (1,) the TCP's lowest world z since the last close [m].
+        pushing_ticks: (1,) ticks since the close with the upward feedforward at or above
+            the threshold and the lift not seen.
     """
 
     hold_ticks: np.ndarray
@@ -112,11 +157,23 @@ class SaturationReleaseState(NamedTuple):
     scale: np.ndarray
     releases: np.ndarray
     ff_unscaled: np.ndarray
+    watch_ticks: np.ndarray
+    lift_min_m: np.ndarray
+    lift_force_min_n: np.ndarray
+    spare_carried: np.ndarray
+    grip_last: np.ndarray
+    armed: np.ndarray
+    lifted: np.ndarray
+    stalled: np.ndarray
+    z_low: np.ndarray
+    pushing_ticks: np.ndarray
 
 
 SATURATION_RELEASE_LAYOUT = Layout.of(SaturationReleaseState, dict(
     **slots("hold_ticks release_alpha recover_alpha margin_nm rise_min_m z_start "
-            "at_bound_ticks scale releases"), ff_unscaled=6), args=("buf", "n_joints"))
+            "at_bound_ticks scale releases"), ff_unscaled=6,
+    **slots("watch_ticks lift_min_m lift_force_min_n spare_carried grip_last armed lifted "
+            "stalled z_low pushing_ticks")), args=("buf", "n_joints"))
 """The saturated-lift release's part of the optional stages' buffer."""
 unpack_saturation_release = SATURATION_RELEASE_LAYOUT.unpacker("unpack_saturation_release",
                                                                __name__)
@@ -133,6 +190,12 @@ def make_saturation_release_state(config: SaturationReleaseConfig, dt_s: float,
     st.release_alpha[0] = -math.expm1(-dt_s / config.release_tau_s)
     st.recover_alpha[0] = -math.expm1(-dt_s / config.recover_tau_s)
     st.scale[0] = 1.0
+    st.watch_ticks[0] = (math.inf if math.isinf(config.lift_watch_s)
+                         else float(round(config.lift_watch_s / dt_s)))
+    st.lift_min_m[0] = config.lift_min_m
+    st.lift_force_min_n[0] = config.lift_force_min_n
+    st.spare_carried[0] = float(config.spare_carried)
+    st.grip_last[0] = 1.0
     return packed
 
 
@@ -143,11 +206,34 @@ def saturation_release_restore(w_ff, st) -> None:
         w_ff[i] = st.ff_unscaled[i]
 
 
+@njit(cache=True, inline="always")
+def _lift_watch(z_tcp, grip_cmd, ff_up, st) -> None:
+    """Advance the lift watch (module docstring) by one tick: arm on a close, disarm on an
+    open, see the lift or count the upward push toward a stall."""
+    if grip_cmd > 0.0 and st.grip_last[0] <= 0.0:  # a close: arm, from this height
+        st.armed[0], st.lifted[0], st.stalled[0] = 1.0, 0.0, 0.0
+        st.z_low[0], st.pushing_ticks[0] = z_tcp, 0.0
+    elif grip_cmd <= 0.0:  # open: nothing is carried
+        st.armed[0], st.lifted[0], st.stalled[0] = 0.0, 0.0, 0.0
+    st.grip_last[0] = grip_cmd
+    if st.armed[0] == 0.0 or st.lifted[0] != 0.0:
+        return
+    st.z_low[0] = min(st.z_low[0], z_tcp)
+    if z_tcp - st.z_low[0] >= st.lift_min_m[0]:
+        st.lifted[0], st.stalled[0] = 1.0, 0.0
+    elif ff_up >= st.lift_force_min_n[0]:
+        st.pushing_ticks[0] += 1.0
+        if st.pushing_ticks[0] >= st.watch_ticks[0]:
+            st.stalled[0] = 1.0
+
+
 @njit(cache=True)  # out of line
-def saturation_release_step(tau_last, tau_max, z_tcp, w_ff, w_cmd, w_extra, st) -> None:
-    """Advance the hold and the scale from the limiter's last output ``tau_last`` and bound
-    ``tau_max`` (n,) [Nm] and the TCP's world height ``z_tcp`` [m]; keep ``w_ff`` (6,)
-    unscaled, scale it in place and write ``w_extra = w_ff + w_cmd``."""
+def saturation_release_step(tau_last, tau_max, z_tcp, grip_cmd, w_ff, w_cmd, w_extra,
+                            st) -> None:
+    """Advance the hold, the lift watch and the scale from the limiter's last output
+    ``tau_last`` and bound ``tau_max`` (n,) [Nm], the TCP's world height ``z_tcp`` [m] and the
+    gripper command ``grip_cmd`` (-1 open ... +1 closed); keep ``w_ff`` (6,) unscaled, scale
+    it in place and write ``w_extra = w_ff + w_cmd``."""
     at_bound = False
     for j in range(tau_last.shape[0]):
         if abs(tau_last[j]) >= tau_max[j] - st.margin_nm[0]:
@@ -161,8 +247,10 @@ def saturation_release_step(tau_last, tau_max, z_tcp, w_ff, w_cmd, w_extra, st) 
         if (st.at_bound_ticks[0] == st.hold_ticks[0]
                 and z_tcp - st.z_start[0] >= st.rise_min_m[0]):
             st.at_bound_ticks[0] = 0.0  # still rising: a new window from here
+    _lift_watch(z_tcp, grip_cmd, w_ff[2], st)
+    spared = st.spare_carried[0] != 0.0 and st.lifted[0] != 0.0
     s = st.scale[0]
-    if st.at_bound_ticks[0] >= st.hold_ticks[0]:
+    if (st.at_bound_ticks[0] >= st.hold_ticks[0] and not spared) or st.stalled[0] != 0.0:
         s -= s * st.release_alpha[0]
         st.releases[0] += 1.0
     else:
@@ -195,15 +283,16 @@ class SaturationRelease:
         return float(self.state.scale[0])
 
     def step(self, tau_last: np.ndarray, tau_max: np.ndarray, w_ff: np.ndarray,
-             w_cmd: np.ndarray | None = None, z_tcp_m: float = 0.0) -> np.ndarray:
+             w_cmd: np.ndarray | None = None, z_tcp_m: float = 0.0,
+             gripper_cmd: float = 1.0) -> np.ndarray:
         """One tick (``saturation_release_step``) with the TCP at world height ``z_tcp_m``
-        [m]: returns ``w_ff`` scaled (a new array)."""
+        [m] and gripper command ``gripper_cmd`` (-1 open ... +1 closed): returns ``w_ff``
+        scaled (a new array)."""
         w = np.array(w_ff, dtype=np.float64)
         cmd = np.zeros(6) if w_cmd is None else np.asarray(w_cmd, dtype=np.float64)
         saturation_release_step(np.asarray(tau_last, dtype=np.float64),
-                                np.asarray(tau_max, dtype=np.float64), float(z_tcp_m), w,
-                                cmd, np.zeros(6),
-                                self.state)
+                                np.asarray(tau_max, dtype=np.float64), float(z_tcp_m),
+                                float(gripper_cmd), w, cmd, np.zeros(6), self.state)
         return w
 
     def reset(self) -> None:
@@ -211,3 +300,5 @@ class SaturationRelease:
         st = self.state
         st.at_bound_ticks[0], st.scale[0], st.releases[0], st.z_start[0] = 0.0, 1.0, 0.0, 0.0
         st.ff_unscaled.fill(0.0)
+        st.grip_last[0], st.armed[0], st.lifted[0], st.stalled[0] = 1.0, 0.0, 0.0, 0.0
+        st.z_low[0], st.pushing_ticks[0] = 0.0, 0.0

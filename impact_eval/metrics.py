@@ -8,7 +8,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from impact_eval.safety import scene_contact, sustained_contact, sustained_peak
+from impact_eval.safety import (
+    FF_PRESS_COLUMNS,
+    ff_press,
+    scene_contact,
+    sustained_contact,
+    sustained_peak,
+)
 
 EPISODE_COLUMNS: tuple[str, ...] = (
     "method",
@@ -123,6 +129,8 @@ class EpisodeTracker:
     _pose_error: list[float] = field(default_factory=list)
     _contact: list[np.ndarray] = field(default_factory=list)
     _contact_dt: float = math.nan
+    _robot_contact: list[np.ndarray] = field(default_factory=list)
+    _ff_into_contact: list[np.ndarray] = field(default_factory=list)
     _drawn_mass: float = math.nan
     _robot_profile: str = ""
 
@@ -166,6 +174,10 @@ class EpisodeTracker:
         if trace is not None and "contact_trace_dt_s" in info:
             self._contact.append(trace)
             self._contact_dt = float(info["contact_trace_dt_s"])  # type: ignore[arg-type]
+        if "ff_into_contact_trace_n" in info and "contact_robot_trace_n" in info:
+            self._robot_contact.append(np.asarray(info["contact_robot_trace_n"], dtype=float))
+            self._ff_into_contact.append(
+                np.asarray(info["ff_into_contact_trace_n"], dtype=float))
 
     def finish(self, reason: str) -> None:
         """End the episode: ``reason`` is "timeout", "terminated", "unstable: …" or "exception: …".
@@ -199,6 +211,15 @@ class EpisodeTracker:
             "robot_profile": self._robot_profile,
             "failure_reason": self.failure_reason,
         }
+
+    def ff_press(self) -> dict[str, float]:
+        """``safety.FF_PRESS_COLUMNS`` of the episode (the press the feedforward takes part
+        in, ``safety.ff_press``; issue 54's diagnostic columns, not in ``episodes.csv``);
+        NaN when the env gives no trace."""
+        if not self._ff_into_contact:
+            return dict.fromkeys(FF_PRESS_COLUMNS, math.nan)
+        return ff_press(np.concatenate(self._robot_contact),
+                        np.concatenate(self._ff_into_contact), self._contact_dt)
 
     def _sustained(self) -> dict[str, float]:
         """``peak_contact_sustained_n``, ``contact_p95_n`` and ``contact_over_*`` of the

@@ -81,6 +81,9 @@ class LockstepBatch:
         self.policy_dt = policy_dt
         self.videos = videos or {}
         """Batch index -> ``video.EpisodeVideo`` of the episodes recorded (``--video``)."""
+        self.with_ff_press = False
+        """Add ``safety.FF_PRESS_COLUMNS`` to each finished episode's columns (issue 54's
+        diagnostic, ``experiments.ff_press``; never in ``episodes.csv``)."""
 
     def run(
         self,
@@ -170,4 +173,7 @@ class LockstepBatch:
             video.close()
         if isinstance(self.policy, FinishingPolicy):  # stop computing discarded actions
             self.policy.finish_envs([i])
-        on_finish(i, tracker.row())
+        columns = tracker.row()
+        if self.with_ff_press:
+            columns.update(tracker.ff_press())
+        on_finish(i, columns)

@@ -119,3 +119,31 @@ def _checked(samples_n: np.ndarray, period_s: float) -> np.ndarray:
     if samples.size and not np.all(np.isfinite(samples)):
         raise ValueError("contact-force samples must be finite")
     return samples
+
+
+FF_PRESS_CONTACT_N = 20.0
+"""Robot-environment normal force [N] above which a feedforward push counts (``ff_press``)."""
+
+FF_PRESS_PUSH_N = 2.0
+"""The feedforward's push toward the environment along the contact normal [N] above which
+the controller counts as pressing (``ff_press``)."""
+
+FF_PRESS_COLUMNS: tuple[str, ...] = ("ff_press_over_20n_s", "ff_press_mean_n")
+"""The controller-attributed press (issue 54): its time [s] and its mean robot contact [N]."""
+
+
+def ff_press(robot_n: np.ndarray, ff_into_n: np.ndarray, period_s: float) -> dict[str, float]:
+    """The press the controller's feedforward takes part in: the time [s] during which the
+    robot-environment normal force exceeds ``FF_PRESS_CONTACT_N`` **and** the force
+    feedforward pushes more than ``FF_PRESS_PUSH_N`` toward the environment along that
+    contact's normal (``info["ff_into_contact_trace_n"]``), and the mean robot contact force
+    [N] over that time (NaN when there is none). Unlike ``contact_over_20n_s`` it does not
+    count a press the impedance or the policy makes alone."""
+    robot = _checked(robot_n, period_s)
+    push = np.asarray(ff_into_n, dtype=float)
+    if push.shape != robot.shape:
+        raise ValueError(f"ff_press: traces of {robot.shape} and {push.shape} samples")
+    pressing = (robot > FF_PRESS_CONTACT_N) & (push > FF_PRESS_PUSH_N)
+    count = int(np.count_nonzero(pressing))
+    return {"ff_press_over_20n_s": float(count * period_s),
+            "ff_press_mean_n": float(robot[pressing].mean()) if count else math.nan}

@@ -26,13 +26,22 @@ from impact_envs.robot.sim import FrankaSim
 CONTACT_EVERY = 4
 """Contact forces are sampled every 4th tick and on a step's last one."""
 
+FF_PUSH_FROM_N = 10.0
+"""The feedforward's push into the robot's contact (``StepTrace.ff_into_contact_n``) is
+computed only where that contact exceeds this [N] (0 elsewhere; the diagnostic that reads it
+counts contacts above 20 N)."""
+
 
 class StepTrace(NamedTuple):
     """What one policy step's ticks leave: per-tick ``taus`` (n, 7) [Nm] and ``qvels`` (n, 7)
     [rad/s], the last sensed ``q`` [rad] and ``dq`` [rad/s], the peak contact forces [N] on
     the robot and on the objects (``FrankaSim.contact_forces``), and both forces per tick
     ``contact_robot_n`` / ``contact_object_n`` (n,) [N], each sample held over the ticks
-    since the previous one (sampled every ``CONTACT_EVERY`` ticks and on the last)."""
+    since the previous one (sampled every ``CONTACT_EVERY`` ticks and on the last), and
+    ``ff_into_contact_n`` (n,) [N], sampled with them: how hard the controller's feedforward
+    wrench pushes the robot into the environment along the robot-environment contact normal
+    (``FrankaSim.push_into_contact``; 0 where the robot's contact is at most
+    ``FF_PUSH_FROM_N``)."""
 
     taus: np.ndarray
     qvels: np.ndarray
@@ -42,6 +51,7 @@ class StepTrace(NamedTuple):
     peak_object_contact_n: float
     contact_robot_n: np.ndarray
     contact_object_n: np.ndarray
+    ff_into_contact_n: np.ndarray
 
 
 class TickTargets(NamedTuple):
@@ -112,7 +122,8 @@ class ClosedLoop:
         friction = sim.frictionloss_reader()  # the friction inside the torque reading
         bundle, tick = self._entries(parts, friction)
         args = bundle(*parts)
-        contact = np.empty((n, 2))
+        contact = np.empty((n, 3))  # robot, object, feedforward into the robot's contact
+        ff = ctrl.tick.wrench_ff  # a view: this tick's applied feedforward
         last = 0
         hook, data = self.tick_hook, sim.data
         for i in range(n):
@@ -123,15 +134,17 @@ class ClosedLoop:
                 self._raise_or_learn(i, flags, plan, targets.learn_mask)
             sim.step()
             if (i + 1) % CONTACT_EVERY == 0 or i == n - 1:
-                contact[last:i + 1] = sim.contact_forces()
+                robot, obj = sim.contact_forces()
+                push = sim.push_into_contact(ff) if robot > FF_PUSH_FROM_N else 0.0
+                contact[last:i + 1] = robot, obj, push
                 last = i + 1
         sim.check_finite()
         plan.qvels[-1] = parts[1].qvel_arm
         ctrl.finish_tick(0, plan.quat_targets[-1], targets.learn_mask)
         q, dq = plan.sensed[:7].copy(), plan.sensed[7:14].copy()
-        peak_robot, peak_obj = (max(float(v), 0.0) for v in contact.max(axis=0))
+        peak_robot, peak_obj = (max(float(v), 0.0) for v in contact[:, :2].max(axis=0))
         return StepTrace(plan.taus, plan.qvels, q, dq, peak_robot, peak_obj,
-                         contact[:, 0], contact[:, 1])
+                         contact[:, 0], contact[:, 1], contact[:, 2])
 
     def _lost(self, n: int) -> np.ndarray:
         """(n,) uint8: 1 where a tick's command is lost (drawn only when the rate is > 0)."""

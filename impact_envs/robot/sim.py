@@ -28,6 +28,7 @@ from impact_envs.robot.sim_kernels import (
     contact_sums,
     count_body_contacts,
     link_torque,
+    robot_contact_resultant,
     send,
     sense,
     state_status,
@@ -147,6 +148,8 @@ class FrankaSim:
         self.tau_applied = np.zeros(7)
         self.tau_pending = np.zeros(7)
         self._tau_scratch = np.zeros(7)
+        self._resultant = np.zeros(6)  # push_into_contact's scratch
+        self._jac_scratch = tuple(np.zeros((3, m.nv)) for _ in range(3))
         self._init_fast_paths()
 
 
@@ -399,6 +402,32 @@ class FrankaSim:
             return 0.0, 0.0
         con = d.contact
         return contact_sums(ncon, con.geom, con.efc_address, d.efc_force, self.geom_group)
+
+    def push_into_contact(self, wrench_world: np.ndarray) -> float:
+        """How hard a wrench on the TCP (6,) [N, Nm, world frame] pushes the robot into the
+        environment along the robot-environment contact normal [N]: its virtual work per
+        metre when the contact point moves into the environment along the normal, by the
+        arm's least-norm joint motion (``dq = pinv(J_c) (-n)``, the TCP twist ``J_tcp dq``).
+        ``n`` is the direction of the environment's net normal force on the robot and the
+        contact point the contacts' force-weighted mean (``robot_contact_resultant``). A pure
+        force on a contact at the TCP gives its component along ``-n``; a torque counts
+        through the rotation that motion needs. 0 without such a contact; negative: it
+        pulls away."""
+        m, d = self.model, self.data
+        if d.ncon == 0:
+            return 0.0
+        con, out = d.contact, self._resultant
+        body = robot_contact_resultant(d.ncon, con.geom, con.efc_address, d.efc_force,
+                                       con.frame, con.pos, self.geom_group, m.geom_bodyid, out)
+        norm = float(np.linalg.norm(out[:3]))
+        if body < 0 or norm == 0.0:
+            return 0.0
+        jac_c, jac_p, jac_r = self._jac_scratch
+        mujoco.mj_jac(m, d, jac_c, None, out[3:], body)
+        mujoco.mj_jacSite(m, d, jac_p, jac_r, self.tcp_site)
+        dq = np.linalg.pinv(jac_c[:, self.arm_dof]) @ (-out[:3] / norm)
+        twist = np.concatenate((jac_p[:, self.arm_dof] @ dq, jac_r[:, self.arm_dof] @ dq))
+        return float(np.asarray(wrench_world, dtype=float) @ twist)
 
     def object_finger_contacts(self, object_body: str) -> int:
         """Number of finger-pad contacts touching ``object_body`` (privileged grasp check)."""

@@ -125,3 +125,38 @@ def contact_sums(ncon, geom, efc_address, efc_force, geom_group):
         ):
             obj_env += efc_force[adr]
     return robot_env, obj_env
+
+
+@njit(cache=True)
+def robot_contact_resultant(ncon, geom, efc_address, efc_force, frame, pos, geom_group,
+                            geom_bodyid, out):
+    """The environment's net normal force on the robot (``out[:3]`` [N, world]: the sum over
+    robot-environment contacts of each normal force along its contact normal, which MuJoCo
+    points from geom 1 to geom 2) and where it acts (``out[3:]``: the contacts' positions
+    weighted by their normal forces [m]); returns the body id of the robot's geom in the
+    hardest of them (-1 without robot-environment contact)."""
+    for k in range(6):
+        out[k] = 0.0
+    total, hardest, body = 0.0, 0.0, -1
+    for i in range(ncon):
+        adr = efc_address[i]
+        if adr < 0:
+            continue
+        g1, g2 = geom_group[geom[i, 0]], geom_group[geom[i, 1]]
+        if g1 == GROUP_ROBOT and g2 == GROUP_OTHER:
+            sign, robot_geom = -1.0, geom[i, 0]  # the robot is geom 1: pushed against n
+        elif g2 == GROUP_ROBOT and g1 == GROUP_OTHER:
+            sign, robot_geom = 1.0, geom[i, 1]
+        else:
+            continue
+        f = efc_force[adr]
+        for k in range(3):
+            out[k] += sign * f * frame[i, k]
+            out[3 + k] += f * pos[i, k]
+        total += f
+        if f > hardest:
+            hardest, body = f, geom_bodyid[robot_geom]
+    if total > 0.0:
+        for k in range(3):
+            out[3 + k] /= total
+    return body

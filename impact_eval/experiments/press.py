@@ -43,7 +43,9 @@ from impact_eval.experiments.physics import Rig
 from impact_eval.experiments.press_modes import TRACES, check_robot_record, mode_controller
 from impact_eval.experiments.press_setdown import run_setdown
 
-MODES = ("impedance", "impact", "impact_unguarded", "paper", "authors_sim")
+MODES = ("impedance", "impact", "impact_unguarded", "paper", "authors_sim", "lift_watch")
+DEFAULT_MODES = MODES[:5]
+"""What ``--modes`` runs when not given (``lift_watch``, issue 54, only when asked)."""
 SCENARIOS = ("both", "plate", "setdown")
 GAP_M, APPROACH_S, PLATE_HALF_THICKNESS_M = 0.03, 1.0, 0.02
 
@@ -122,7 +124,8 @@ def _parser() -> OneLineParser:
     parser.add_argument("--loads-kg", default="3,6", help="set-down: loads [kg], e.g. 3,6")
     parser.add_argument("--setdown-depths", default="15,30",
                         help="set-down: [mm] below the table contact, e.g. 15,30")
-    parser.add_argument("--modes", nargs="+", default=list(MODES), help=", ".join(MODES))
+    parser.add_argument("--modes", nargs="+", default=list(DEFAULT_MODES),
+                        help=", ".join(MODES))
     parser.add_argument("--hold-s", type=float, default=None,
                         help="hold [s] (default: plate 8, set-down 6)")
     parser.add_argument("--traces", choices=TRACES, default="failing",

@@ -98,7 +98,7 @@ def test_the_command_is_not_scaled_and_restore_gives_the_unscaled_feedforward() 
     from impact_control.saturation_release import saturation_release_step
 
     w, cmd, extra = W_FF.copy(), np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0]), np.zeros(6)
-    saturation_release_step(WRIST_AT_BOUND, TAU_MAX, 0.0, w, cmd, extra, sr.state)
+    saturation_release_step(WRIST_AT_BOUND, TAU_MAX, 0.0, 1.0, w, cmd, extra, sr.state)
     s = math.exp(-0.2)
     np.testing.assert_allclose(w, s * W_FF, rtol=1e-13)
     np.testing.assert_allclose(extra, s * W_FF + cmd, rtol=1e-13)
@@ -114,7 +114,8 @@ def test_on_in_default_only_and_off_through_an_override() -> None:
     from impact_control.presets import PRESETS, preset_config
 
     for name in PRESETS:
-        assert preset_config(name).saturation_release.enabled == (name == "default"), name
+        on = name in ("default", "lift_watch")
+        assert preset_config(name).saturation_release.enabled == on, name
     assert ControllerConfig().saturation_release == SaturationReleaseConfig(
         enabled=True, hold_s=0.5, release_tau_s=0.25, recover_tau_s=2.0, margin_nm=0.1,
         rise_min_m=0.01)
@@ -157,3 +158,91 @@ def test_a_lift_still_rising_restarts_the_window_and_a_stalled_one_is_released()
 def test_rise_min_must_be_finite() -> None:
     with pytest.raises(InvalidArgumentError, match="rise_min_m"):
         SaturationReleaseConfig(rise_min_m=math.inf)
+
+
+# --- the lift watch (issue 54; the ``lift_watch`` preset) -------------------------------------
+UP = np.array([0.0, 0.0, 30.0, 0.0, 0.0, 0.0])  # 30 N up: above the 10 N threshold
+WEAK = np.array([0.0, 0.0, 5.0, 0.0, 0.0, 0.0])  # below it
+
+
+def _watch(**kw) -> SaturationRelease:
+    # dt 1 ms; watch 5 ms = 5 ticks; lift seen at 20 mm; release tau 10 ms
+    cfg = SaturationReleaseConfig(enabled=True, hold_s=0.003, release_tau_s=0.01,
+                                  recover_tau_s=0.02, lift_watch_s=0.005, **kw)
+    return SaturationRelease(cfg, 0.001)
+
+
+def _close(sr: SaturationRelease, z: float = 0.0) -> None:
+    sr.step(FREE, TAU_MAX, FREE[:6], z_tcp_m=z, gripper_cmd=-1.0)  # open, then close
+    sr.step(FREE, TAU_MAX, FREE[:6], z_tcp_m=z, gripper_cmd=1.0)
+
+
+def test_a_push_that_lifts_nothing_is_released_and_stays_released_until_the_hand_opens() -> None:
+    sr = _watch()
+    _close(sr)
+    for _ in range(4):  # 4 ticks pushing up, no rise: not yet
+        np.testing.assert_array_equal(sr.step(FREE, TAU_MAX, UP, gripper_cmd=1.0), UP)
+    w = sr.step(FREE, TAU_MAX, UP, gripper_cmd=1.0)  # the 5th: stalled, released
+    assert sr.state.stalled[0] == 1.0
+    np.testing.assert_allclose(w, math.exp(-0.1) * UP, rtol=1e-12)
+    for _ in range(200):  # latched: no joint at its bound, still released
+        sr.step(FREE, TAU_MAX, UP, gripper_cmd=1.0)
+    assert sr.scale < 1e-6
+    sr.step(FREE, TAU_MAX, UP, gripper_cmd=-1.0)  # the hand opens: disarmed, recovering
+    assert sr.state.armed[0] == 0.0 and sr.state.stalled[0] == 0.0
+    assert sr.scale > 1e-6
+
+
+def test_a_lift_seen_in_time_is_never_released_and_spared_at_the_bound() -> None:
+    sr = _watch(spare_carried=True)
+    _close(sr, z=0.10)
+    for k in range(4):
+        sr.step(FREE, TAU_MAX, UP, z_tcp_m=0.10 - 0.001 * k, gripper_cmd=1.0)  # sinks 3 mm
+    sr.step(FREE, TAU_MAX, UP, z_tcp_m=0.097 + 0.020, gripper_cmd=1.0)  # 20 mm above the low
+    assert sr.state.lifted[0] == 1.0 and sr.state.stalled[0] == 0.0
+    for _ in range(50):  # carried with the wrist at its bound: spared, no release
+        w = sr.step(WRIST_AT_BOUND, TAU_MAX, UP, z_tcp_m=0.12, gripper_cmd=1.0)
+    np.testing.assert_array_equal(w, UP)
+    assert sr.state.releases[0] == 0.0
+
+
+def test_without_spare_carried_the_wrist_release_still_acts_on_a_carried_load() -> None:
+    sr = _watch(spare_carried=False)
+    _close(sr)
+    sr.step(FREE, TAU_MAX, UP, z_tcp_m=0.05, gripper_cmd=1.0)  # lifted at once
+    for _ in range(10):
+        sr.step(WRIST_AT_BOUND, TAU_MAX, UP, z_tcp_m=0.05, gripper_cmd=1.0)
+    assert sr.state.lifted[0] == 1.0 and sr.scale < 1.0
+
+
+def test_weak_push_or_a_hand_closed_from_the_start_never_stalls() -> None:
+    sr = _watch()
+    _close(sr)
+    for _ in range(50):  # below lift_force_min_n: a light load, no time counted
+        sr.step(FREE, TAU_MAX, WEAK, gripper_cmd=1.0)
+    assert sr.state.pushing_ticks[0] == 0.0 and sr.scale == 1.0
+    sr = _watch()  # closed since reset (a tool in the hand): never armed
+    for _ in range(50):
+        sr.step(FREE, TAU_MAX, UP, gripper_cmd=1.0)
+    assert sr.state.armed[0] == 0.0 and sr.scale == 1.0
+
+
+def test_a_late_lift_ends_the_stall() -> None:
+    sr = _watch()
+    _close(sr)
+    for _ in range(20):
+        sr.step(FREE, TAU_MAX, UP, gripper_cmd=1.0)
+    assert sr.state.stalled[0] == 1.0
+    sr.step(FREE, TAU_MAX, UP, z_tcp_m=0.02, gripper_cmd=1.0)
+    assert sr.state.stalled[0] == 0.0 and sr.state.lifted[0] == 1.0
+    s = sr.scale
+    sr.step(FREE, TAU_MAX, UP, z_tcp_m=0.02, gripper_cmd=1.0)
+    assert sr.scale > s  # recovering
+
+
+def test_lift_watch_values_are_checked() -> None:
+    for bad in (0.0, -1.0, math.nan):
+        with pytest.raises(InvalidArgumentError, match="lift_watch_s"):
+            SaturationReleaseConfig(lift_watch_s=bad)
+    with pytest.raises(InvalidArgumentError, match="lift_min_m"):
+        SaturationReleaseConfig(lift_min_m=0.0)

@@ -29,3 +29,17 @@ def test_empty_and_bad_traces() -> None:
         sustained_contact(np.ones(3), 0.0)
     with pytest.raises(ValueError, match="finite"):
         sustained_contact(np.array([1.0, np.nan]), 0.004)
+
+
+def test_ff_press_counts_only_where_the_contact_is_hard_and_the_feedforward_pushes_into_it():
+    from impact_eval.safety import ff_press
+
+    robot = np.array([0.0, 25.0, 25.0, 25.0, 15.0, 40.0])
+    push = np.array([5.0, 5.0, 1.0, -3.0, 5.0, 2.5])  # into the contact [N]
+    out = ff_press(robot, push, 0.001)
+    assert out["ff_press_over_20n_s"] == pytest.approx(0.002)  # samples 1 and 5 only
+    assert out["ff_press_mean_n"] == pytest.approx(32.5)
+    quiet = ff_press(robot, np.zeros(6), 0.001)
+    assert quiet["ff_press_over_20n_s"] == 0.0 and np.isnan(quiet["ff_press_mean_n"])
+    with pytest.raises(ValueError, match="traces"):
+        ff_press(robot, push[:3], 0.001)

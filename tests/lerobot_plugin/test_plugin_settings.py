@@ -38,7 +38,8 @@ def test_defaults() -> None:
     ({"task": "Nail-v0"}, "valid choices: Hammer-v1, Dumbbell-v1, Calligraphy-v1, "
                           "Disturbance-v1, HammerBasket-v1"),
     ({"controller": "pid"}, "valid choices: impedance, impact"),
-    ({"controller_preset": "fast"}, "valid choices: default, paper, authors_sim, authors_real"),
+    ({"controller_preset": "fast"},
+     "valid choices: default, paper, lift_watch, authors_sim, authors_real"),
     ({"obs_mode": "rgbd"}, "valid choices: state, rgb, state+rgb"),
     ({"object_mass": 20.0}, "valid: 0.05 to 12.0 kg"),
     ({"object_mass": 1.0, "mass_bin": (1.0, 2.0)}, "valid: one of them"),

@@ -10,6 +10,7 @@ from fixtures.rollouts import expert_rollout
 from impact_control.errors import InvalidArgumentError
 from impact_envs import ENV_IDS
 from impact_envs.loop import ClosedLoop, StepTrace, TickTargets
+from impact_envs.loop.closed_loop import FF_PUSH_FROM_N
 from impact_envs.tasks.base import Task
 
 
@@ -24,7 +25,7 @@ class _ReferenceLoop:
         sim, ctrl = self.sim, self.controller
         n = targets.positions.shape[0]
         taus, qvels = np.empty((n, 7)), np.empty((n, 7))
-        contact, last = np.zeros((n, 2)), 0
+        contact, last = np.zeros((n, 3)), 0
         for i in range(n):
             if self.hook is not None:
                 self.hook(sim, float(sim.data.time))
@@ -36,11 +37,14 @@ class _ReferenceLoop:
             sim.step()
             taus[i], qvels[i] = sim.tau_applied, sim.arm_state()[1]
             if (i + 1) % 4 == 0 or i == n - 1:
-                contact[last:i + 1], last = sim.contact_forces(), i + 1
+                robot, obj = sim.contact_forces()
+                push = (sim.push_into_contact(ctrl.signals.wrench_ff_world)
+                        if robot > FF_PUSH_FROM_N else 0.0)
+                contact[last:i + 1], last = (robot, obj, push), i + 1
         sim.check_finite()
-        peaks = np.maximum(contact.max(axis=0), 0.0)
+        peaks = np.maximum(contact[:, :2].max(axis=0), 0.0)
         return StepTrace(taus, qvels, q.copy(), dq.copy(), float(peaks[0]), float(peaks[1]),
-                         contact[:, 0], contact[:, 1])
+                         contact[:, 0], contact[:, 1], contact[:, 2])
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)

@@ -96,3 +96,26 @@ def test_gripper_holds_10kg_hammer_without_slip():
 def test_grasp_force_validation():
     with pytest.raises(InvalidArgumentError, match="grasp_force_n"):
         FrankaSim("hammer_scene.xml", ("hammer",), grasp_force_n=-1.0)
+
+
+def test_push_into_contact_reads_the_tables_normal_under_a_pressing_hand():
+    """A hand held 2 cm into the table: the robot-table contact's normal is vertical, so a
+    force on the TCP pushes into the table by its downward part, a horizontal force hardly at
+    all, and a torque only through the rotation the contact's motion needs (issue 54's
+    metric)."""
+    sim = FrankaSim("hammer_scene.xml", ("hammer",), noise=SensorNoise.off())
+    arm = PinocchioArm()
+    assert sim.push_into_contact(np.array([0.0, 0.0, -10.0, 0, 0, 0])) == 0.0  # no contact
+    q_press = solve_ik(arm, np.array([0.5, -0.2, -0.02]), R_DOWN)
+    sim.reset_robot(solve_ik(arm, np.array([0.5, -0.2, 0.05]), R_DOWN), 0.0,
+                    np.random.default_rng(0))
+    _hold(sim, q_press, 1.0, 1500)
+    robot, _ = sim.contact_forces()
+    assert robot > 5.0
+    down = sim.push_into_contact(np.array([0.0, 0.0, -10.0, 0.0, 0.0, 0.0]))
+    assert down == pytest.approx(10.0, rel=0.1)
+    assert sim.push_into_contact(np.array([0.0, 0.0, 25.0, 0.0, 0.0, 0.0])) == pytest.approx(
+        -2.5 * down, rel=1e-9)  # linear in the wrench
+    assert abs(sim.push_into_contact(np.array([10.0, -10.0, 0.0, 0.0, 0.0, 0.0]))) < 2.0
+    torque = sim.push_into_contact(np.array([0.0, 0.0, 0.0, 1.0, 1.0, 0.0]))
+    assert np.isfinite(torque)
