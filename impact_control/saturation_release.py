@@ -88,6 +88,10 @@ class SaturationReleaseConfig:
             watch counts time.
         spare_carried: The saturation release does not act once the lift is seen since the
             last close (False in ``default``).
+        tip_hold_s: Tip test of the lift watch: the lift is stalled once some joint has
+            been at its torque bound for this long in all (not necessarily without a break)
+            since the close while the lift is not seen [s] (inf: no tip test, as in
+            ``default``).
     """
 
     enabled: bool = True
@@ -100,8 +104,13 @@ class SaturationReleaseConfig:
     lift_min_m: float = 0.02
     lift_force_min_n: float = 10.0
     spare_carried: bool = False
+    tip_hold_s: float = math.inf
 
     def __post_init__(self) -> None:
+        if not (self.tip_hold_s > 0.0):  # inf allowed: no tip test
+            raise InvalidArgumentError(
+                f"invalid saturation_release.tip_hold_s {self.tip_hold_s!r}; valid: a time "
+                "> 0 [s], or inf (no tip test)")
         if not (self.lift_watch_s > 0.0):  # inf allowed: no lift watch
             raise InvalidArgumentError(
                 f"invalid saturation_release.lift_watch_s {self.lift_watch_s!r}; valid: a "
@@ -145,6 +154,9 @@ class SaturationReleaseState(NamedTuple):
         z_low: (1,) the TCP's lowest world z since the last close [m].
         pushing_ticks: (1,) ticks since the close with the upward feedforward at or above
             the threshold and the lift not seen.
+        tip_ticks: (1,) the tip test's hold in ticks (round(tip_hold_s / dt); inf: off).
+        bound_ticks: (1,) ticks since the close with a joint at its bound and the lift not
+            seen.
     """
 
     hold_ticks: np.ndarray
@@ -167,13 +179,15 @@ class SaturationReleaseState(NamedTuple):
     stalled: np.ndarray
     z_low: np.ndarray
     pushing_ticks: np.ndarray
+    tip_ticks: np.ndarray
+    bound_ticks: np.ndarray
 
 
 SATURATION_RELEASE_LAYOUT = Layout.of(SaturationReleaseState, dict(
     **slots("hold_ticks release_alpha recover_alpha margin_nm rise_min_m z_start "
             "at_bound_ticks scale releases"), ff_unscaled=6,
     **slots("watch_ticks lift_min_m lift_force_min_n spare_carried grip_last armed lifted "
-            "stalled z_low pushing_ticks")), args=("buf", "n_joints"))
+            "stalled z_low pushing_ticks tip_ticks bound_ticks")), args=("buf", "n_joints"))
 """The saturated-lift release's part of the optional stages' buffer."""
 unpack_saturation_release = SATURATION_RELEASE_LAYOUT.unpacker("unpack_saturation_release",
                                                                __name__)
@@ -196,6 +210,8 @@ def make_saturation_release_state(config: SaturationReleaseConfig, dt_s: float,
     st.lift_force_min_n[0] = config.lift_force_min_n
     st.spare_carried[0] = float(config.spare_carried)
     st.grip_last[0] = 1.0
+    st.tip_ticks[0] = (math.inf if math.isinf(config.tip_hold_s)
+                       else float(round(config.tip_hold_s / dt_s)))
     return packed
 
 
@@ -207,12 +223,12 @@ def saturation_release_restore(w_ff, st) -> None:
 
 
 @njit(cache=True, inline="always")
-def _lift_watch(z_tcp, grip_cmd, ff_up, st) -> None:
+def _lift_watch(z_tcp, grip_cmd, ff_up, at_bound, st) -> None:
     """Advance the lift watch (module docstring) by one tick: arm on a close, disarm on an
-    open, see the lift or count the upward push toward a stall."""
+    open, see the lift or count the upward push and the time at the bound toward a stall."""
     if grip_cmd > 0.0 and st.grip_last[0] <= 0.0:  # a close: arm, from this height
         st.armed[0], st.lifted[0], st.stalled[0] = 1.0, 0.0, 0.0
-        st.z_low[0], st.pushing_ticks[0] = z_tcp, 0.0
+        st.z_low[0], st.pushing_ticks[0], st.bound_ticks[0] = z_tcp, 0.0, 0.0
     elif grip_cmd <= 0.0:  # open: nothing is carried
         st.armed[0], st.lifted[0], st.stalled[0] = 0.0, 0.0, 0.0
     st.grip_last[0] = grip_cmd
@@ -221,9 +237,14 @@ def _lift_watch(z_tcp, grip_cmd, ff_up, st) -> None:
     st.z_low[0] = min(st.z_low[0], z_tcp)
     if z_tcp - st.z_low[0] >= st.lift_min_m[0]:
         st.lifted[0], st.stalled[0] = 1.0, 0.0
-    elif ff_up >= st.lift_force_min_n[0]:
+        return
+    if ff_up >= st.lift_force_min_n[0]:
         st.pushing_ticks[0] += 1.0
         if st.pushing_ticks[0] >= st.watch_ticks[0]:
+            st.stalled[0] = 1.0
+    if at_bound:  # the tip test: a load the wrist cannot hold tips the hand
+        st.bound_ticks[0] += 1.0
+        if st.bound_ticks[0] >= st.tip_ticks[0]:
             st.stalled[0] = 1.0
 
 
@@ -247,7 +268,7 @@ def saturation_release_step(tau_last, tau_max, z_tcp, grip_cmd, w_ff, w_cmd, w_e
         if (st.at_bound_ticks[0] == st.hold_ticks[0]
                 and z_tcp - st.z_start[0] >= st.rise_min_m[0]):
             st.at_bound_ticks[0] = 0.0  # still rising: a new window from here
-    _lift_watch(z_tcp, grip_cmd, w_ff[2], st)
+    _lift_watch(z_tcp, grip_cmd, w_ff[2], at_bound, st)
     spared = st.spare_carried[0] != 0.0 and st.lifted[0] != 0.0
     s = st.scale[0]
     if (st.at_bound_ticks[0] >= st.hold_ticks[0] and not spared) or st.stalled[0] != 0.0:
@@ -301,4 +322,4 @@ class SaturationRelease:
         st.at_bound_ticks[0], st.scale[0], st.releases[0], st.z_start[0] = 0.0, 1.0, 0.0, 0.0
         st.ff_unscaled.fill(0.0)
         st.grip_last[0], st.armed[0], st.lifted[0], st.stalled[0] = 1.0, 0.0, 0.0, 0.0
-        st.z_low[0], st.pushing_ticks[0] = 0.0, 0.0
+        st.z_low[0], st.pushing_ticks[0], st.bound_ticks[0] = 0.0, 0.0, 0.0
