@@ -165,10 +165,10 @@ UP = np.array([0.0, 0.0, 30.0, 0.0, 0.0, 0.0])  # 30 N up: above the 10 N thresh
 WEAK = np.array([0.0, 0.0, 5.0, 0.0, 0.0, 0.0])  # below it
 
 
-def _watch(**kw) -> SaturationRelease:
+def _watch(lift_watch_s: float = 0.005, **kw) -> SaturationRelease:
     # dt 1 ms; watch 5 ms = 5 ticks; lift seen at 20 mm; release tau 10 ms
     cfg = SaturationReleaseConfig(enabled=True, hold_s=0.003, release_tau_s=0.01,
-                                  recover_tau_s=0.02, lift_watch_s=0.005, **kw)
+                                  recover_tau_s=0.02, lift_watch_s=lift_watch_s, **kw)
     return SaturationRelease(cfg, 0.001)
 
 
@@ -246,3 +246,22 @@ def test_lift_watch_values_are_checked() -> None:
             SaturationReleaseConfig(lift_watch_s=bad)
     with pytest.raises(InvalidArgumentError, match="lift_min_m"):
         SaturationReleaseConfig(lift_min_m=0.0)
+
+
+def test_the_tip_test_stalls_on_time_at_the_bound_in_all_before_the_lift() -> None:
+    # no lift watch by time; 3 ticks at the bound in all (with breaks) since the close stall it
+    sr = _watch(lift_watch_s=math.inf, tip_hold_s=0.003)
+    _close(sr)
+    for tau in (WRIST_AT_BOUND, FREE, WRIST_AT_BOUND, FREE):
+        sr.step(tau, TAU_MAX, UP, gripper_cmd=1.0)
+    assert sr.state.stalled[0] == 0.0 and sr.state.bound_ticks[0] == 2.0
+    sr.step(WRIST_AT_BOUND, TAU_MAX, UP, gripper_cmd=1.0)
+    assert sr.state.stalled[0] == 1.0
+    sr = _watch(lift_watch_s=math.inf, tip_hold_s=0.003, spare_carried=True)
+    _close(sr)
+    sr.step(FREE, TAU_MAX, UP, z_tcp_m=0.05, gripper_cmd=1.0)  # lifted first: no tip test
+    for _ in range(20):
+        sr.step(WRIST_AT_BOUND, TAU_MAX, UP, z_tcp_m=0.05, gripper_cmd=1.0)
+    assert sr.state.stalled[0] == 0.0 and sr.scale == 1.0
+    with pytest.raises(InvalidArgumentError, match="tip_hold_s"):
+        SaturationReleaseConfig(tip_hold_s=0.0)
