@@ -37,7 +37,7 @@ the load rests on) carries it: the lift is *stalled*, and the scale decays towar
 release and stays there until the gripper opens (which disarms the watch) or the TCP rises
 ``lift_min_m`` above ``z_low`` after all (the lift seen: the scale recovers). With
 ``tip_hold_s`` finite (off in every preset: it ended every press on the tuning seeds and
-lost a third of the heavy lifts, docs/controller.md), some joint at its bound for that long
+lost 13-17 of 28 lifts from 7 kg up, docs/controller.md), some joint at its bound for that long
 in all since the close, before the lift is seen, stalls the lift too. With
 ``spare_carried`` the saturation release above does not act once the lift is seen (a load
 the arm has lifted is carried, not let go, while the wrist is at its bound). Only the
