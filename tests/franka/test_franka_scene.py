@@ -178,8 +178,9 @@ def test_a_second_client_is_refused_in_one_line(tmp_path) -> None:
     python = simulator_python()
     assert python
     with franky_scene() as host:
-        first = subprocess.Popen([sys.executable, "-m", "impact_franka.cli", "hold", "--host",
-                                  host, "--seconds", "8"], stdout=subprocess.PIPE, text=True)
+        first = subprocess.Popen([sys.executable, "-m", "impact_franka.cli", "hold",
+                                  *SIM_BUDGET, "--host", host, "--seconds", "8"],
+                                 stdout=subprocess.PIPE, text=True)  # the second's start loads it
         try:
             deadline = time.monotonic() + 60
             while "mode" not in (first.stdout.readline() if first.stdout else ""):
