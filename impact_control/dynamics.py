@@ -179,10 +179,3 @@ class PinocchioArm:
         estimator must model is zero. ``self.damping`` keeps the MJCF viscous coefficients.
         """
         return np.zeros(len(dq))
-
-    def forward_kinematics(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """TCP position [m] and rotation matrix in the world frame at ``q`` (no caching)."""
-        data = self.model.createData()
-        pin.framesForwardKinematics(self.model, data, q)
-        placement = data.oMf[self._tcp]
-        return placement.translation.copy(), placement.rotation.copy()

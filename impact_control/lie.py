@@ -78,11 +78,6 @@ def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
     )
 
 
-def quat_conjugate(quat: np.ndarray) -> np.ndarray:
-    """Conjugate (= inverse for unit quaternions) of (w, x, y, z)."""
-    return np.array([quat[0], -quat[1], -quat[2], -quat[3]], dtype=float)
-
-
 def _quat_log_tuple(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:
     """Rotation vector of a unit quaternion with w >= 0 (angle in [0, pi],
     ``kernel_math.quat_log``)."""

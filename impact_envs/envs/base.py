@@ -223,10 +223,6 @@ class ImpactEnv(gym.Env):
         self.set_state(saved["state"])
         self.spec = saved["spec"]
 
-    def set_object_mass(self, mass_kg: float) -> None:
-        """Persistently set the object mass [kg]."""
-        self.set_param("object_mass", mass_kg)
-
     # ------------------------------------------------------------------- reset
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         if options is not None and not isinstance(options, Mapping):
