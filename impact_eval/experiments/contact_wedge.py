@@ -14,16 +14,13 @@ on it is its weight. This prints both, so the two cases can be told apart.
 
 from __future__ import annotations
 
-import argparse
-import sys
-
 import mujoco
 import numpy as np
 
+from impact_control.cli import OneLineParser
 from impact_control.errors import ImpactError
 from impact_control.policy import stack_obs
-from impact_eval.envs import check_env_id, describe_env, make_env
-from impact_eval.methods import resolve_method
+from impact_eval.experiments.trace import open_method, start_episode
 
 
 def contact_lines(model: mujoco.MjModel, data: mujoco.MjData, body: str) -> list[str]:
@@ -53,33 +50,31 @@ def contact_lines(model: mujoco.MjModel, data: mujoco.MjData, body: str) -> list
 
 def main(argv: list[str] | None = None) -> None:
     """Entry point."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = OneLineParser(description=__doc__.splitlines()[0])
     p.add_argument("--env", default="IMPACT/HammerBasket-v1")
     p.add_argument("--method", required=True)
     p.add_argument("--value", type=float, required=True, help="the env's parameter value")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--steps", type=int, required=True, help="policy steps before the reading")
-    p.add_argument("--body", default="hammer")
+    p.add_argument("--body", default="hammer", help="the body whose contacts are read")
     args = p.parse_args(argv)
+    if args.steps < 0:
+        p.fail(f"invalid --steps {args.steps}; valid: >= 0")
     try:
-        env_id = check_env_id(args.env)
-        spec = resolve_method(args.method)
-        env = make_env(env_id, spec.controller, (), spec.preset, robot=spec.robot)
-        policy = spec.build(env_id, env)
-        obs, _ = env.reset(seed=args.seed, options={describe_env(env).param_name: args.value})
-        policy.reset(1)
-        if hasattr(policy, "seed_envs"):
-            policy.seed_envs([args.seed])
+        env, policy = open_method(args.env, args.method)
+        sim = env.unwrapped.sim
+        bodies = [sim.model.body(i).name for i in range(sim.model.nbody)]
+        if args.body not in bodies:
+            p.fail(f"invalid --body {args.body!r}; valid choices: {', '.join(bodies[1:])}")
+        obs = start_episode(env, policy, args.value, args.seed)
         for _ in range(args.steps):
             obs, *_ = env.step(np.asarray(policy.act(stack_obs([obs]))[0]))
-        sim = env.unwrapped.sim
-        print("\n".join(contact_lines(sim.model, sim.data, args.body)))
-        robot, _ = sim.contact_forces()
-        print(f"robot-environment normal force: {robot:.1f} N; gripper opening "
-              f"{sim.gripper_width() * 1000:.0f} mm")
     except ImpactError as exc:
-        print(f"{p.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
-        raise SystemExit(2) from None
+        p.fail(" ".join(str(exc).split()))
+    print("\n".join(contact_lines(sim.model, sim.data, args.body)))
+    robot, _ = sim.contact_forces()
+    print(f"robot-environment normal force: {robot:.1f} N; gripper opening "
+          f"{sim.gripper_width() * 1000:.0f} mm")
 
 
 if __name__ == "__main__":

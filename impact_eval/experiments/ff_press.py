@@ -27,13 +27,14 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 import math
-import sys
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+from impact_control.cli import OneLineParser
 from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_eval.grid import episode_seed, parse_grid
 from impact_eval.safety import FF_PRESS_COLUMNS
@@ -162,8 +163,15 @@ def summary(path: Path, baseline: str, candidate: str) -> list[str]:
     """Per value: successes of ``baseline`` and ``candidate`` on the same episodes, the pairs
     only one of them won, the failed episodes' longest time above 20 N and the longest ff
     press; then the pooled counts with the exact McNemar p-value."""
-    with path.open(newline="") as f:
-        rows = list(csv.DictReader(f))
+    try:
+        with path.open(newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as exc:
+        raise InvalidArgumentError(f"cannot read {str(path)!r}: {exc.strerror}") from None
+    names = sorted({r.get("method", "") for r in rows})
+    if baseline not in names or candidate not in names:
+        raise InvalidArgumentError(f"--summary {baseline},{candidate}: {str(path)!r} holds "
+                                   f"rows of {', '.join(names) or 'no method'}")
     by = {(r["method"], float(r["param_value"]), int(r["episode"])): r for r in rows}
     lines = [f"value | {baseline} | {candidate} | only {baseline} | only {candidate} | "
              "failed > 20 N, longest [s] (each) | ff press, longest [s] (each)"]
@@ -192,9 +200,61 @@ def summary(path: Path, baseline: str, candidate: str) -> list[str]:
     return lines
 
 
+def check_out(out: Path, env_id: str, overrides: Sequence[str]) -> None:
+    """``out`` may be written and, if it exists, holds this runner's rows of the same env and
+    ``--controller-set`` (kept beside it in ``OUT.json``); else a one-line
+    ``InvalidArgumentError``, nothing written."""
+    setup = {"env": env_id, "controller_set": list(overrides)}
+    record = out.with_suffix(".json")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        if out.exists():
+            with out.open(newline="") as f:
+                header = next(csv.reader(f), [])
+            had = json.loads(record.read_text()) if record.exists() else None
+            if tuple(header) != COLUMNS or had != setup:
+                raise InvalidArgumentError(
+                    f"--out {str(out)!r} holds other rows (columns or {record.name}: "
+                    f"{had}); valid: a new file, or this run's own to resume")
+        else:
+            record.write_text(json.dumps(setup) + "\n")
+    except (OSError, json.JSONDecodeError) as exc:
+        raise InvalidArgumentError(f"cannot use --out {str(out)!r}: {exc}") from None
+
+
+def _cells(args: argparse.Namespace) -> list[Cell]:
+    """The run's cells from the command line, every input checked first (one line each)."""
+    from impact_control.config import ControllerConfig
+    from impact_control.overrides import apply_overrides
+    from impact_eval.envs import check_env_id
+    from impact_eval.methods import resolve_method
+
+    if args.workers < 1 or args.episodes < 1:
+        raise InvalidArgumentError("--workers and --episodes must be >= 1")
+    methods = [m for m in args.methods.split(",") if m]
+    if not methods:
+        raise InvalidArgumentError("--methods names no method; valid: a comma list of "
+                                   "impact-eval methods")
+    for method in methods:
+        resolve_method(method)
+    check_env_id(args.env)
+    apply_overrides(ControllerConfig(), args.controller_set)
+    if (args.pairs_from is None) == (args.values is None):
+        raise InvalidArgumentError("give either --pairs-from (with --pairs-method) or "
+                                   "--values (exactly one)")
+    if args.pairs_from is not None:
+        pairs = pairs_from(args.pairs_from, args.pairs_method or "", args.values_from,
+                           args.values_to)
+    else:
+        pairs = grid_pairs(parse_grid(args.values), args.episodes, args.seed)
+    return [Cell(m, args.env, tuple(args.controller_set),
+                 tuple(p for p in pairs if p[0] == v))
+            for m in methods for v in sorted({p[0] for p in pairs})]
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = OneLineParser(description=__doc__.splitlines()[0])
     p.add_argument("--env", default="IMPACT/Hammer-v1")
     p.add_argument("--methods", default="", help="comma list of impact-eval methods")
     p.add_argument("--pairs-from", type=Path, help="a table's episodes.csv")
@@ -216,24 +276,11 @@ def main(argv: list[str] | None = None) -> None:
             baseline, _, candidate = args.summary.partition(",")
             print("\n".join(summary(args.out, baseline, candidate)))
             return
-        if args.workers < 1 or args.episodes < 1:
-            raise InvalidArgumentError("--workers and --episodes must be >= 1")
-        if (args.pairs_from is None) == (args.values is None):
-            raise InvalidArgumentError("give either --pairs-from (with --pairs-method) or "
-                                       "--values (exactly one)")
-        if args.pairs_from is not None:
-            pairs = pairs_from(args.pairs_from, args.pairs_method or "", args.values_from,
-                               args.values_to)
-        else:
-            pairs = grid_pairs(parse_grid(args.values), args.episodes, args.seed)
-        values = sorted({p[0] for p in pairs})
-        cells = [Cell(m, args.env, tuple(args.controller_set),
-                      tuple(p for p in pairs if p[0] == v))
-                 for m in args.methods.split(",") for v in values]
-        run(cells, args.out, args.workers)
+        cells = _cells(args)
+        check_out(args.out, args.env, args.controller_set)
     except ImpactError as exc:
-        print(f"{p.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
-        raise SystemExit(2) from None
+        p.fail(" ".join(str(exc).split()))
+    run(cells, args.out, args.workers)
 
 
 if __name__ == "__main__":

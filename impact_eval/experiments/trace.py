@@ -34,26 +34,38 @@ from impact_eval.methods import resolve_method
 HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate  rel_s  hand_n"
 
 
+def open_method(env_id: str, method: str, overrides: Sequence[str] = (),
+                robot_overrides: Sequence[str] = ()) -> tuple[object, object]:
+    """(env, policy) of ``method`` on ``env_id``, as impact-eval builds them (the method's
+    controller, preset and robot, e.g. ``impact_authors``' commanded torque reading)."""
+    spec = resolve_method(method)
+    env = make_env(check_env_id(env_id), spec.controller, overrides, spec.preset,
+                   robot=spec.robot, robot_overrides=robot_overrides)
+    return env, spec.build(env_id, env)
+
+
+def start_episode(env, policy, value: float, seed: int) -> dict:
+    """Reset ``env`` at the parameter ``value`` with the episode ``seed`` and the policy for
+    one env, its sampling noise from the same seed (as impact-eval); the first observation."""
+    obs, _ = env.reset(seed=seed, options={describe_env(env).param_name: value})
+    policy.reset(1)
+    if hasattr(policy, "seed_envs"):
+        policy.seed_envs([seed])
+    return obs
+
+
 def trace(env_id: str, method: str, value: float, seed: int, every: int,
           overrides: Sequence[str] = (), joint_friction: bool = True,
           robot_overrides: Sequence[str] = ()) -> list[str]:
     """Run one episode (until success or the step limit); return the printed lines."""
-    spec = resolve_method(method)
-    env = make_env(check_env_id(env_id), spec.controller, overrides, spec.preset,
-                   robot=spec.robot,  # impact_authors: the commanded torque reading
-                   robot_overrides=robot_overrides)
+    env, policy = open_method(env_id, method, overrides, robot_overrides)
     limit = np.asarray(env.unwrapped.controller.config.limits.torque_max_nm)
     saturated = np.zeros(len(limit), dtype=int)
     release = env.unwrapped.controller.optional.saturation_release
     if not joint_friction:
         sim = env.unwrapped.sim
         sim.model.dof_frictionloss[sim.arm_dof] = 0.0
-    param = describe_env(env).param_name
-    policy = spec.build(env_id, env)
-    obs, _ = env.reset(seed=seed, options={param: value})
-    policy.reset(1)
-    if hasattr(policy, "seed_envs"):  # DP sampling noise from the episode seed, as impact-eval
-        policy.seed_envs([seed])
+    obs = start_episode(env, policy, value, seed)
     lines, step, done = [HEADER], 0, False
     while not done:
         action = np.asarray(policy.act(stack_obs([obs]))[0])

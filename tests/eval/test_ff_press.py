@@ -54,3 +54,56 @@ def test_pairs_from_a_table_keep_its_seeds_and_drawn_masses(tmp_path: Path) -> N
     assert pairs_from(path, "impact", 5, 10) == [(9.0, 9.0, 11, 0), (8.0, 9.5, 12, 1)]
     with pytest.raises(InvalidArgumentError, match="no rows of method 'nope'"):
         pairs_from(path, "nope", 5, 10)
+
+
+def _refused(argv: list[str], capsys: pytest.CaptureFixture[str], needle: str) -> None:
+    from impact_eval.experiments.ff_press import main
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and err.count("\n") == 1 and "Traceback" not in err
+    assert needle in err, err
+
+
+def test_bad_input_is_one_line_and_writes_nothing(tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "rows.csv"
+    grid = ["--values", "9", "--episodes", "1", "--out", str(out)]
+    _refused(["--methods", "impakt", *grid], capsys, "impakt")
+    _refused(["--methods", "", *grid], capsys, "names no method")
+    _refused(["--methods", "impact", "--env", "IMPACT/Nail-v1", *grid], capsys, "Nail")
+    _refused(["--methods", "impact", "--controller-set", "guard.nope=1", *grid], capsys,
+             "nope")
+    _refused(["--methods", "impact", "--workers", "0", *grid], capsys, "--workers")
+    assert not out.exists() and not out.with_suffix(".json").exists()
+    out.write_text("a,b\n1,2\n")  # somebody else's file: never appended to
+    _refused(["--methods", "impact", *grid], capsys, "holds other rows")
+    assert out.read_text() == "a,b\n1,2\n"
+    _refused(["--out", str(tmp_path / "none.csv"), "--summary", "a,b"], capsys, "cannot read")
+    _refused(["--out", str(out), "--summary", "a,b"], capsys, "holds rows of")
+
+
+def test_a_resume_needs_the_same_env_and_controller_changes(tmp_path: Path) -> None:
+    from impact_eval.experiments.ff_press import check_out
+
+    out = tmp_path / "rows.csv"
+    check_out(out, "IMPACT/Hammer-v1", ["guard.enabled=False"])
+    out.write_text(",".join(COLUMNS) + "\n")
+    check_out(out, "IMPACT/Hammer-v1", ["guard.enabled=False"])  # the same run: resumes
+    with pytest.raises(InvalidArgumentError, match="holds other rows"):
+        check_out(out, "IMPACT/Hammer-v1", [])
+    with pytest.raises(InvalidArgumentError, match="holds other rows"):
+        check_out(out, "IMPACT/Dumbbell-v1", ["guard.enabled=False"])
+
+
+def test_contact_wedge_refuses_bad_steps_and_bodies(capsys: pytest.CaptureFixture[str]) -> None:
+    from impact_eval.experiments.contact_wedge import main
+
+    for argv, needle in ((["--steps", "-1"], "invalid --steps -1"),
+                         (["--steps", "0", "--body", "anvil"], "invalid --body 'anvil'")):
+        with pytest.raises(SystemExit) as exit_info:
+            main(["--env", "IMPACT/Hammer-v1", "--method", "scripted", "--value", "1",
+                  *argv])
+        err = capsys.readouterr().err
+        assert exit_info.value.code == 2 and err.count("\n") == 1 and needle in err, err
