@@ -315,7 +315,8 @@ class ImpactEnv(gym.Env):
                 "peak_object_contact_force_n": trace.peak_object_contact_n,
                 "contact_robot_trace_n": trace.contact_robot_n,
                 "contact_object_trace_n": trace.contact_object_n,
-                "ff_into_contact_trace_n": trace.ff_into_contact_n}
+                **({} if trace.ff_into_contact_n is None  # loop.record_ff_push off
+                   else {"ff_into_contact_trace_n": trace.ff_into_contact_n})}
 
     # ------------------------------------------------------------- observation
     def _observation(self) -> dict[str, np.ndarray]:
@@ -354,8 +355,7 @@ class ImpactEnv(gym.Env):
                              "peak_robot_contact_force_n": 0.0,
                              "peak_object_contact_force_n": 0.0,
                              "contact_robot_trace_n": np.zeros(0),
-                             "contact_object_trace_n": np.zeros(0),
-                             "ff_into_contact_trace_n": np.zeros(0)})
+                             "contact_object_trace_n": np.zeros(0)})
         info.update(m)  # contact with the scene, raw: the evaluation judges it (safety.py)
         info["contact_trace_dt_s"] = self.sim.dt
         info["supported_weight_n"] = self.task.supported_weight_n(self._episode_params)

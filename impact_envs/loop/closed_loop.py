@@ -38,8 +38,9 @@ class StepTrace(NamedTuple):
     the robot and on the objects (``FrankaSim.contact_forces``), and both forces per tick
     ``contact_robot_n`` / ``contact_object_n`` (n,) [N], each sample held over the ticks
     since the previous one (sampled every ``CONTACT_EVERY`` ticks and on the last), and
-    ``ff_into_contact_n`` (n,) [N], sampled with them: how hard the controller's feedforward
-    wrench pushes the robot into the environment along the robot-environment contact normal
+    ``ff_into_contact_n`` (n,) [N], sampled with them when ``ClosedLoop.record_ff_push`` is
+    on (None otherwise): how hard the controller's feedforward wrench pushes the robot into
+    the environment along the robot-environment contact normal
     (``FrankaSim.push_into_contact``; 0 where the robot's contact is at most
     ``FF_PUSH_FROM_N``)."""
 
@@ -51,7 +52,7 @@ class StepTrace(NamedTuple):
     peak_object_contact_n: float
     contact_robot_n: np.ndarray
     contact_object_n: np.ndarray
-    ff_into_contact_n: np.ndarray
+    ff_into_contact_n: np.ndarray | None
 
 
 class TickTargets(NamedTuple):
@@ -91,6 +92,9 @@ class ClosedLoop:
         self.arm = ArmArrays(dynamics.chain, dynamics.chain_work, bool(dynamics.need_coriolis),
                              dynamics.q_model, dynamics.dq_model, dynamics.model_arrays)
         self._dyn = dynamics_arrays(dynamics)
+        self.record_ff_push = False
+        """Record ``StepTrace.ff_into_contact_n`` (issue 54's diagnostic; off: the loop does
+        none of its work, a Jacobian and a pseudo-inverse per contact sample)."""
         self._fric_model = np.zeros(7)
         self._bundle: Callable[..., object] | None = None
         self._tick: Callable[..., int] | None = None
@@ -124,6 +128,7 @@ class ClosedLoop:
         args = bundle(*parts)
         contact = np.empty((n, 3))  # robot, object, feedforward into the robot's contact
         ff = ctrl.tick.wrench_ff  # a view: this tick's applied feedforward
+        record = self.record_ff_push
         last = 0
         hook, data = self.tick_hook, sim.data
         for i in range(n):
@@ -135,7 +140,8 @@ class ClosedLoop:
             sim.step()
             if (i + 1) % CONTACT_EVERY == 0 or i == n - 1:
                 robot, obj = sim.contact_forces()
-                push = sim.push_into_contact(ff) if robot > FF_PUSH_FROM_N else 0.0
+                push = (sim.push_into_contact(ff) if record and robot > FF_PUSH_FROM_N
+                        else 0.0)
                 contact[last:i + 1] = robot, obj, push
                 last = i + 1
         sim.check_finite()
@@ -144,7 +150,7 @@ class ClosedLoop:
         q, dq = plan.sensed[:7].copy(), plan.sensed[7:14].copy()
         peak_robot, peak_obj = (max(float(v), 0.0) for v in contact[:, :2].max(axis=0))
         return StepTrace(plan.taus, plan.qvels, q, dq, peak_robot, peak_obj,
-                         contact[:, 0], contact[:, 1], contact[:, 2])
+                         contact[:, 0], contact[:, 1], contact[:, 2] if record else None)
 
     def _lost(self, n: int) -> np.ndarray:
         """(n,) uint8: 1 where a tick's command is lost (drawn only when the rate is > 0)."""

@@ -69,6 +69,8 @@ def run_cell(cell: Cell) -> list[dict[str, object]]:
     spec = resolve_method(cell.method)
     envs = [make_env(cell.env_id, spec.controller, cell.overrides, spec.preset,
                      robot=spec.robot) for _ in cell.episodes]
+    for env in envs:  # the loop records the feedforward's push only when asked
+        env.unwrapped.loop.record_ff_push = True
     described = describe_env(envs[0])
     batch = LockstepBatch(envs, spec.build(cell.env_id, envs[0]), described.param_name,
                           described.policy_dt)

@@ -20,6 +20,7 @@ class _ReferenceLoop:
 
     def __init__(self, loop: ClosedLoop) -> None:
         self.sim, self.controller, self.hook = loop.sim, loop.controller, loop.tick_hook
+        self.record_ff_push = loop.record_ff_push
 
     def run(self, targets: TickTargets) -> StepTrace:
         sim, ctrl = self.sim, self.controller
@@ -39,12 +40,13 @@ class _ReferenceLoop:
             if (i + 1) % 4 == 0 or i == n - 1:
                 robot, obj = sim.contact_forces()
                 push = (sim.push_into_contact(ctrl.signals.wrench_ff_world)
-                        if robot > FF_PUSH_FROM_N else 0.0)
+                        if self.record_ff_push and robot > FF_PUSH_FROM_N else 0.0)
                 contact[last:i + 1], last = (robot, obj, push), i + 1
         sim.check_finite()
         peaks = np.maximum(contact[:, :2].max(axis=0), 0.0)
         return StepTrace(taus, qvels, q.copy(), dq.copy(), float(peaks[0]), float(peaks[1]),
-                         contact[:, 0], contact[:, 1], contact[:, 2])
+                         contact[:, 0], contact[:, 1],
+                         contact[:, 2] if self.record_ff_push else None)
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
@@ -86,3 +88,19 @@ def test_loop_needs_a_reset_controller():
                           -1.0, None, None)
     with pytest.raises(InvalidArgumentError, match="reset"):
         loop.run(targets)
+
+
+def test_the_feedforward_push_is_recorded_only_when_asked():
+    """``ClosedLoop.record_ff_push`` (issue 54's diagnostic) adds
+    ``info["ff_into_contact_trace_n"]``, one value per tick; off (the default) the loop does
+    none of that work and the key is absent."""
+    env = gym.make("IMPACT/Hammer-v1", controller="impact")
+    env.reset(seed=0)
+    action = np.concatenate([env.unwrapped.sim.tcp_pose()[0], [1, 0, 0, 0, -1, 0], [-1.0]])
+    _, _, _, _, info = env.step(action)
+    assert "ff_into_contact_trace_n" not in info
+    env.unwrapped.loop.record_ff_push = True
+    _, _, _, _, info = env.step(action)
+    trace = info["ff_into_contact_trace_n"]
+    assert trace.shape == info["contact_robot_trace_n"].shape and not trace.any()  # no contact
+    env.close()
