@@ -10,7 +10,9 @@ import numpy as np
 
 from impact_eval.safety import (
     FF_PRESS_COLUMNS,
+    NET_CONTACT_COLUMNS,
     ff_press,
+    net_contact,
     scene_contact,
     sustained_contact,
     sustained_peak,
@@ -131,6 +133,7 @@ class EpisodeTracker:
     _contact_dt: float = math.nan
     _robot_contact: list[np.ndarray] = field(default_factory=list)
     _ff_into_contact: list[np.ndarray] = field(default_factory=list)
+    _contact_net: list[np.ndarray] = field(default_factory=list)
     _drawn_mass: float = math.nan
     _robot_profile: str = ""
 
@@ -178,6 +181,8 @@ class EpisodeTracker:
             self._robot_contact.append(np.asarray(info["contact_robot_trace_n"], dtype=float))
             self._ff_into_contact.append(
                 np.asarray(info["ff_into_contact_trace_n"], dtype=float))
+        if "contact_object_net_trace_n" in info:
+            self._contact_net.append(scene_contact(info, "contact_object_net_trace_n")[1])
 
     def finish(self, reason: str) -> None:
         """End the episode: ``reason`` is "timeout", "terminated", "unstable: …" or "exception: …".
@@ -212,14 +217,16 @@ class EpisodeTracker:
             "failure_reason": self.failure_reason,
         }
 
-    def ff_press(self) -> dict[str, float]:
-        """``safety.FF_PRESS_COLUMNS`` of the episode (the press the feedforward takes part
-        in, ``safety.ff_press``; issue 54's diagnostic columns, not in ``episodes.csv``);
-        NaN when the env gives no trace."""
-        if not self._ff_into_contact:
-            return dict.fromkeys(FF_PRESS_COLUMNS, math.nan)
-        return ff_press(np.concatenate(self._robot_contact),
-                        np.concatenate(self._ff_into_contact), self._contact_dt)
+    def press_diagnostics(self) -> dict[str, float]:
+        """``safety.FF_PRESS_COLUMNS`` (the press the feedforward takes part in,
+        ``safety.ff_press``) and ``safety.NET_CONTACT_COLUMNS`` (the scene contact with the
+        object's net force) of the episode: issue 54's diagnostic columns, not in
+        ``episodes.csv``; NaN when the env gives no traces."""
+        if not self._ff_into_contact or not self._contact_net:
+            return dict.fromkeys((*FF_PRESS_COLUMNS, *NET_CONTACT_COLUMNS), math.nan)
+        return {**ff_press(np.concatenate(self._robot_contact),
+                           np.concatenate(self._ff_into_contact), self._contact_dt),
+                **net_contact(np.concatenate(self._contact_net), self._contact_dt)}
 
     def _sustained(self) -> dict[str, float]:
         """``peak_contact_sustained_n``, ``contact_p95_n`` and ``contact_over_*`` of the

@@ -81,8 +81,9 @@ class LockstepBatch:
         self.policy_dt = policy_dt
         self.videos = videos or {}
         """Batch index -> ``video.EpisodeVideo`` of the episodes recorded (``--video``)."""
-        self.with_ff_press = False
-        """Add ``safety.FF_PRESS_COLUMNS`` to each finished episode's columns (issue 54's
+        self.with_press_diagnostics = False
+        """Add ``safety.FF_PRESS_COLUMNS`` and ``NET_CONTACT_COLUMNS`` to each finished
+        episode's columns (issue 54's
         diagnostic, ``experiments.ff_press``; never in ``episodes.csv``)."""
 
     def run(
@@ -174,6 +175,6 @@ class LockstepBatch:
         if isinstance(self.policy, FinishingPolicy):  # stop computing discarded actions
             self.policy.finish_envs([i])
         columns = tracker.row()
-        if self.with_ff_press:
-            columns.update(tracker.ff_press())
+        if self.with_press_diagnostics:
+            columns.update(tracker.press_diagnostics())
         on_finish(i, columns)

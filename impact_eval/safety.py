@@ -42,20 +42,22 @@ SUSTAINED_PEAK_WINDOW_S = 0.05
 """How long [s] the contact must stay at a force level for ``sustained_peak`` to count it."""
 
 
-def scene_contact(info: Mapping[str, object]) -> tuple[float | None, np.ndarray | None]:
+def scene_contact(info: Mapping[str, object], object_trace: str = "contact_object_trace_n"
+                  ) -> tuple[float | None, np.ndarray | None]:
     """``(peak [N], per-tick trace [N])`` of one env step's contact with the scene that
     counts (module docstring), from the step's ``info``: ``peak_robot_contact_force_n``,
     ``peak_object_contact_force_n``, their traces ``contact_robot_trace_n`` /
-    ``contact_object_trace_n`` and ``supported_weight_n`` (0 when absent). None for what the
-    env does not report."""
+    ``object_trace`` and ``supported_weight_n`` (0 when absent). None for what the env does
+    not report. ``object_trace="contact_object_net_trace_n"`` reads the object's net contact
+    force in place of its normal sum (``NET_CONTACT_COLUMNS``)."""
     allowance = float(info.get("supported_weight_n", 0.0))  # type: ignore[arg-type]
     peak = trace = None
     if "peak_robot_contact_force_n" in info and "peak_object_contact_force_n" in info:
         peak = max(float(info["peak_robot_contact_force_n"]),  # type: ignore[arg-type]
                    float(info["peak_object_contact_force_n"]) - allowance, 0.0)  # type: ignore[arg-type]
-    if "contact_robot_trace_n" in info and "contact_object_trace_n" in info:
+    if "contact_robot_trace_n" in info and object_trace in info:
         robot = np.asarray(info["contact_robot_trace_n"], dtype=float)
-        obj = np.asarray(info["contact_object_trace_n"], dtype=float)
+        obj = np.asarray(info[object_trace], dtype=float)
         trace = np.maximum(np.maximum(robot, obj - allowance), 0.0)
     return peak, trace
 
@@ -119,6 +121,22 @@ def _checked(samples_n: np.ndarray, period_s: float) -> np.ndarray:
     if samples.size and not np.all(np.isfinite(samples)):
         raise ValueError("contact-force samples must be finite")
     return samples
+
+
+NET_CONTACT_COLUMNS: tuple[str, ...] = ("contact_net_p95_n", "contact_net_over_20n_s")
+"""``contact_p95_n`` and ``contact_over_20n_s`` with the object's **net** contact force (its
+normals and friction summed as vectors, ``FrankaSim.object_net_contact``) in place of the sum
+of its normals, less the same supported weight (issue 54's diagnostic columns, not in
+``episodes.csv``): a body wedged in the basket, whose kilonewtons of normals cancel against
+their friction, counts what it transmits, its weight, i.e. nothing beyond the support."""
+
+
+def net_contact(scene_net_n: np.ndarray, period_s: float) -> dict[str, float]:
+    """``NET_CONTACT_COLUMNS`` of an episode's scene-contact trace built with the object's
+    net force (``scene_contact(info, "contact_object_net_trace_n")``)."""
+    out = sustained_contact(scene_net_n, period_s)
+    return {"contact_net_p95_n": out["contact_p95_n"],
+            "contact_net_over_20n_s": out["contact_over_20n_s"]}
 
 
 FF_PRESS_CONTACT_N = 20.0

@@ -315,8 +315,9 @@ class ImpactEnv(gym.Env):
                 "peak_object_contact_force_n": trace.peak_object_contact_n,
                 "contact_robot_trace_n": trace.contact_robot_n,
                 "contact_object_trace_n": trace.contact_object_n,
-                **({} if trace.ff_into_contact_n is None  # loop.record_ff_push off
-                   else {"ff_into_contact_trace_n": trace.ff_into_contact_n})}
+                **({} if trace.ff_into_contact_n is None  # loop.record_press_diagnostics off
+                   else {"ff_into_contact_trace_n": trace.ff_into_contact_n,
+                         "contact_object_net_trace_n": trace.contact_object_net_n})}
 
     # ------------------------------------------------------------- observation
     def _observation(self) -> dict[str, np.ndarray]:

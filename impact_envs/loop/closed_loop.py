@@ -38,11 +38,14 @@ class StepTrace(NamedTuple):
     the robot and on the objects (``FrankaSim.contact_forces``), and both forces per tick
     ``contact_robot_n`` / ``contact_object_n`` (n,) [N], each sample held over the ticks
     since the previous one (sampled every ``CONTACT_EVERY`` ticks and on the last), and
-    ``ff_into_contact_n`` (n,) [N], sampled with them when ``ClosedLoop.record_ff_push`` is
-    on (None otherwise): how hard the controller's feedforward wrench pushes the robot into
-    the environment along the robot-environment contact normal
+    ``ff_into_contact_n`` (n,) [N], sampled with them when
+    ``ClosedLoop.record_press_diagnostics`` is on (None otherwise): how hard the
+    controller's feedforward wrench pushes the robot into the environment along the
+    robot-environment contact normal
     (``FrankaSim.push_into_contact``; 0 where the robot's contact is at most
-    ``FF_PUSH_FROM_N``)."""
+    ``FF_PUSH_FROM_N``), and with it ``contact_object_net_n`` (n,) [N]: the magnitude of the
+    environment's net force on the objects (``FrankaSim.object_net_contact``: normals and
+    friction as vectors, where ``contact_object_n`` sums normals)."""
 
     taus: np.ndarray
     qvels: np.ndarray
@@ -53,6 +56,7 @@ class StepTrace(NamedTuple):
     contact_robot_n: np.ndarray
     contact_object_n: np.ndarray
     ff_into_contact_n: np.ndarray | None
+    contact_object_net_n: np.ndarray | None
 
 
 class TickTargets(NamedTuple):
@@ -92,9 +96,10 @@ class ClosedLoop:
         self.arm = ArmArrays(dynamics.chain, dynamics.chain_work, bool(dynamics.need_coriolis),
                              dynamics.q_model, dynamics.dq_model, dynamics.model_arrays)
         self._dyn = dynamics_arrays(dynamics)
-        self.record_ff_push = False
-        """Record ``StepTrace.ff_into_contact_n`` (issue 54's diagnostic; off: the loop does
-        none of its work, a Jacobian and a pseudo-inverse per contact sample)."""
+        self.record_press_diagnostics = False
+        """Record ``StepTrace.ff_into_contact_n`` and ``contact_object_net_n`` (issue 54's
+        diagnostics; off: the loop does none of their work, a Jacobian and a pseudo-inverse
+        per contact sample and a pass over the object's contacts)."""
         self._fric_model = np.zeros(7)
         self._bundle: Callable[..., object] | None = None
         self._tick: Callable[..., int] | None = None
@@ -126,9 +131,9 @@ class ClosedLoop:
         friction = sim.frictionloss_reader()  # the friction inside the torque reading
         bundle, tick = self._entries(parts, friction)
         args = bundle(*parts)
-        contact = np.empty((n, 3))  # robot, object, feedforward into the robot's contact
+        contact = np.empty((n, 4))  # robot, object, feedforward push, object's net force
         ff = ctrl.tick.wrench_ff  # a view: this tick's applied feedforward
-        record = self.record_ff_push
+        record = self.record_press_diagnostics
         last = 0
         hook, data = self.tick_hook, sim.data
         for i in range(n):
@@ -142,7 +147,8 @@ class ClosedLoop:
                 robot, obj = sim.contact_forces()
                 push = (sim.push_into_contact(ff) if record and robot > FF_PUSH_FROM_N
                         else 0.0)
-                contact[last:i + 1] = robot, obj, push
+                net = sim.object_net_contact() if record else 0.0
+                contact[last:i + 1] = robot, obj, push, net
                 last = i + 1
         sim.check_finite()
         plan.qvels[-1] = parts[1].qvel_arm
@@ -150,7 +156,8 @@ class ClosedLoop:
         q, dq = plan.sensed[:7].copy(), plan.sensed[7:14].copy()
         peak_robot, peak_obj = (max(float(v), 0.0) for v in contact[:, :2].max(axis=0))
         return StepTrace(plan.taus, plan.qvels, q, dq, peak_robot, peak_obj,
-                         contact[:, 0], contact[:, 1], contact[:, 2] if record else None)
+                         contact[:, 0], contact[:, 1], contact[:, 2] if record else None,
+                         contact[:, 3] if record else None)
 
     def _lost(self, n: int) -> np.ndarray:
         """(n,) uint8: 1 where a tick's command is lost (drawn only when the rate is > 0)."""

@@ -403,6 +403,25 @@ class FrankaSim:
         con = d.contact
         return contact_sums(ncon, con.geom, con.efc_address, d.efc_force, self.geom_group)
 
+    def object_net_contact(self) -> float:
+        """Magnitude [N] of the **net** force the environment exerts on the task objects:
+        each object-environment contact's full force (normal and friction,
+        ``mujoco.mj_contactForce``) in world axes, summed as vectors. A hammer resting in the
+        basket gives its weight however its contacts are loaded; a body wedged between a floor
+        and a wall, whose normals cancel against its friction, gives its weight too, where
+        ``contact_forces`` sums kilonewtons of normals (docs/hammer_basket.md, "Contact after
+        a success"). Finger-object contacts are excluded (the grasp)."""
+        m, d, group = self.model, self.data, self.geom_group
+        net, force = np.zeros(3), np.zeros(6)
+        for i in range(d.ncon):
+            g1, g2 = group[d.contact.geom[i, 0]], group[d.contact.geom[i, 1]]
+            if {g1, g2} != {GROUP_OBJECT, GROUP_OTHER} or d.contact.efc_address[i] < 0:
+                continue
+            mujoco.mj_contactForce(m, d, i, force)  # on geom 2, in the contact frame
+            world = d.contact.frame[i].reshape(3, 3).T @ force[:3]
+            net += world if g2 == GROUP_OBJECT else -world
+        return float(np.linalg.norm(net))
+
     def push_into_contact(self, wrench_world: np.ndarray) -> float:
         """How hard a wrench on the TCP (6,) [N, Nm, world frame] pushes the robot into the
         environment along the robot-environment contact normal [N]: its virtual work per

@@ -37,11 +37,12 @@ from pathlib import Path
 from impact_control.cli import OneLineParser
 from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_eval.grid import episode_seed, parse_grid
-from impact_eval.safety import FF_PRESS_COLUMNS
+from impact_eval.safety import FF_PRESS_COLUMNS, NET_CONTACT_COLUMNS
 
 COLUMNS: tuple[str, ...] = ("method", "env_id", "param_value", "reset_value", "seed",
                             "episode", "success", "length", "contact_over_20n_s",
-                            "peak_contact_sustained_n", *FF_PRESS_COLUMNS)
+                            "peak_contact_sustained_n", *FF_PRESS_COLUMNS,
+                            *NET_CONTACT_COLUMNS)
 
 
 Episode = tuple[float, float, int, int]
@@ -70,11 +71,11 @@ def run_cell(cell: Cell) -> list[dict[str, object]]:
     envs = [make_env(cell.env_id, spec.controller, cell.overrides, spec.preset,
                      robot=spec.robot) for _ in cell.episodes]
     for env in envs:  # the loop records the feedforward's push only when asked
-        env.unwrapped.loop.record_ff_push = True
+        env.unwrapped.loop.record_press_diagnostics = True
     described = describe_env(envs[0])
     batch = LockstepBatch(envs, spec.build(cell.env_id, envs[0]), described.param_name,
                           described.policy_dt)
-    batch.with_ff_press = True
+    batch.with_press_diagnostics = True
     jobs = [EpisodeJob(value, seed, episode, reset) for value, reset, seed, episode
             in cell.episodes]
     rows: list[dict[str, object]] = []

@@ -26,7 +26,8 @@ def _row(method: str, value: float, episode: int, success: int, over: float,
             "reset_value": value, "seed": 100 + episode, "episode": episode,
             "success": success, "length": 750, "contact_over_20n_s": over,
             "peak_contact_sustained_n": 1.0, "ff_press_over_20n_s": ff,
-            "ff_press_mean_n": math.nan}
+            "ff_press_mean_n": math.nan, "contact_net_p95_n": 0.0,
+            "contact_net_over_20n_s": 0.0}
 
 
 def test_summary_pairs_the_episodes_and_pools_them(tmp_path: Path) -> None:

@@ -43,3 +43,25 @@ def test_ff_press_counts_only_where_the_contact_is_hard_and_the_feedforward_push
     assert quiet["ff_press_over_20n_s"] == 0.0 and np.isnan(quiet["ff_press_mean_n"])
     with pytest.raises(ValueError, match="traces"):
         ff_press(robot, push[:3], 0.001)
+
+
+def test_a_wedged_object_counts_its_sum_of_normals_but_not_its_net_force():
+    """A body jammed between floor and wall (docs/hammer_basket.md, "Contact after a
+    success"): its normals sum to kilonewtons, its net force is its weight. The scene contact
+    read with the net force (``NET_CONTACT_COLUMNS``) counts nothing beyond the support; a
+    robot press still counts in full."""
+    from impact_eval.safety import net_contact, scene_contact
+
+    weight, n = 84.2, 8
+    info = {"contact_robot_trace_n": np.zeros(n), "contact_object_trace_n": np.full(n, 2700.0),
+            "contact_object_net_trace_n": np.full(n, weight + 0.5),
+            "supported_weight_n": weight, "peak_robot_contact_force_n": 0.0,
+            "peak_object_contact_force_n": 2700.0}
+    _, normals = scene_contact(info)
+    _, net = scene_contact(info, "contact_object_net_trace_n")
+    assert normals == pytest.approx(2700.0 - weight) and net == pytest.approx(0.5)
+    assert net_contact(net, 0.001) == {"contact_net_p95_n": pytest.approx(0.5),
+                                       "contact_net_over_20n_s": 0.0}
+    info["contact_robot_trace_n"] = np.full(n, 30.0)  # the hand presses: it counts
+    assert net_contact(scene_contact(info, "contact_object_net_trace_n")[1], 0.001)[
+        "contact_net_over_20n_s"] == pytest.approx(n * 0.001)

@@ -20,13 +20,13 @@ class _ReferenceLoop:
 
     def __init__(self, loop: ClosedLoop) -> None:
         self.sim, self.controller, self.hook = loop.sim, loop.controller, loop.tick_hook
-        self.record_ff_push = loop.record_ff_push
+        self.record_press_diagnostics = loop.record_press_diagnostics
 
     def run(self, targets: TickTargets) -> StepTrace:
         sim, ctrl = self.sim, self.controller
         n = targets.positions.shape[0]
         taus, qvels = np.empty((n, 7)), np.empty((n, 7))
-        contact, last = np.zeros((n, 3)), 0
+        contact, last = np.zeros((n, 4)), 0
         for i in range(n):
             if self.hook is not None:
                 self.hook(sim, float(sim.data.time))
@@ -40,13 +40,15 @@ class _ReferenceLoop:
             if (i + 1) % 4 == 0 or i == n - 1:
                 robot, obj = sim.contact_forces()
                 push = (sim.push_into_contact(ctrl.signals.wrench_ff_world)
-                        if self.record_ff_push and robot > FF_PUSH_FROM_N else 0.0)
-                contact[last:i + 1], last = (robot, obj, push), i + 1
+                        if self.record_press_diagnostics and robot > FF_PUSH_FROM_N else 0.0)
+                net = sim.object_net_contact() if self.record_press_diagnostics else 0.0
+                contact[last:i + 1], last = (robot, obj, push, net), i + 1
         sim.check_finite()
         peaks = np.maximum(contact[:, :2].max(axis=0), 0.0)
         return StepTrace(taus, qvels, q.copy(), dq.copy(), float(peaks[0]), float(peaks[1]),
                          contact[:, 0], contact[:, 1],
-                         contact[:, 2] if self.record_ff_push else None)
+                         contact[:, 2] if self.record_press_diagnostics else None,
+                         contact[:, 3] if self.record_press_diagnostics else None)
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
@@ -90,17 +92,20 @@ def test_loop_needs_a_reset_controller():
         loop.run(targets)
 
 
-def test_the_feedforward_push_is_recorded_only_when_asked():
-    """``ClosedLoop.record_ff_push`` (issue 54's diagnostic) adds
-    ``info["ff_into_contact_trace_n"]``, one value per tick; off (the default) the loop does
-    none of that work and the key is absent."""
+def test_the_press_diagnostics_are_recorded_only_when_asked():
+    """``ClosedLoop.record_press_diagnostics`` (issue 54's diagnostics) adds
+    ``info["ff_into_contact_trace_n"]`` and ``info["contact_object_net_trace_n"]``, one value
+    per tick; off (the default) the loop does none of that work and the keys are absent."""
     env = gym.make("IMPACT/Hammer-v1", controller="impact")
     env.reset(seed=0)
     action = np.concatenate([env.unwrapped.sim.tcp_pose()[0], [1, 0, 0, 0, -1, 0], [-1.0]])
     _, _, _, _, info = env.step(action)
-    assert "ff_into_contact_trace_n" not in info
-    env.unwrapped.loop.record_ff_push = True
+    assert "ff_into_contact_trace_n" not in info and "contact_object_net_trace_n" not in info
+    env.unwrapped.loop.record_press_diagnostics = True
     _, _, _, _, info = env.step(action)
     trace = info["ff_into_contact_trace_n"]
     assert trace.shape == info["contact_robot_trace_n"].shape and not trace.any()  # no contact
+    net = info["contact_object_net_trace_n"]  # the hammer rests on the table: its weight
+    assert net.shape == trace.shape
+    assert net == pytest.approx(9.81 * info["object_mass"], rel=0.05)
     env.close()
