@@ -1,5 +1,7 @@
 """Named controller presets: ``"default"`` (the shipped configuration), ``"paper"``,
-``"lift_watch"`` (``default`` with the lift watch: ``LIFT_WATCH``), and the
+``"keep_carried"`` (``default`` whose saturated-lift release spares a lifted load:
+``KEEP_CARRIED``, issue 54), ``"lift_watch"`` (experimental: ``default`` with the lift watch,
+``LIFT_WATCH``), and the
 authors' released controller as it runs in their simulation (``"authors_sim"``) and on their
 robot (``"authors_real"``; ``authors_presets.py``).
 
@@ -24,8 +26,17 @@ from impact_control.config import ControllerConfig
 from impact_control.errors import InvalidArgumentError, check_choice
 from impact_control.overrides import apply_overrides
 
-PRESETS: tuple[str, ...] = ("default", "paper", "lift_watch", *AUTHORS_PRESETS)
+PRESETS: tuple[str, ...] = ("default", "paper", "keep_carried", "lift_watch",
+                             *AUTHORS_PRESETS)
 """Valid preset names."""
+
+KEEP_CARRIED: dict[str, str] = {
+    "saturation_release.spare_carried": "True",
+}
+"""Fields where ``keep_carried`` differs from ``default`` (issue 54's preset, chosen on tuning
+seeds on Hammer and HammerBasket, docs/controller.md "Keep carried"): once the TCP has risen
+20 mm since the gripper closed, the saturated-lift release no longer scales the feedforward
+down, so a load the arm has lifted is carried, not let go, while the wrist is at its bound."""
 
 LIFT_WATCH: dict[str, str] = {
     "saturation_release.lift_watch_s": "4.0",
@@ -67,8 +78,9 @@ def preset_config(name: str, estimator: str | None = None) -> ControllerConfig:
     config = ControllerConfig()
     if name == "paper":
         config = revert_departures(config, DEPARTURES)
-    elif name == "lift_watch":
-        config = apply_overrides(config, [f"{k}={v}" for k, v in LIFT_WATCH.items()])
+    elif name in ("keep_carried", "lift_watch"):
+        fields = KEEP_CARRIED if name == "keep_carried" else LIFT_WATCH
+        config = apply_overrides(config, [f"{k}={v}" for k, v in fields.items()])
     if estimator is None:
         return config
     return replace(config, estimator=replace(config.estimator, kind=estimator))

@@ -43,9 +43,11 @@ from impact_eval.experiments.physics import Rig
 from impact_eval.experiments.press_modes import TRACES, check_robot_record, mode_controller
 from impact_eval.experiments.press_setdown import run_setdown
 
-MODES = ("impedance", "impact", "impact_unguarded", "paper", "authors_sim", "lift_watch")
+MODES = ("impedance", "impact", "impact_unguarded", "paper", "authors_sim", "lift_watch",
+         "keep_carried")
 DEFAULT_MODES = MODES[:5]
-"""What ``--modes`` runs when not given (``lift_watch``, issue 54, only when asked)."""
+"""What ``--modes`` runs when not given (``lift_watch`` and ``keep_carried``, issue 54, only
+when asked)."""
 SCENARIOS = ("both", "plate", "setdown")
 GAP_M, APPROACH_S, PLATE_HALF_THICKNESS_M = 0.03, 1.0, 0.02
 

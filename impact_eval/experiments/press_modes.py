@@ -20,7 +20,8 @@ TRACES = ("failing", "impact", "all", "none")
 def mode_controller(mode: str) -> tuple[str, ControllerConfig]:
     """(controller mode, config) of a press mode: its preset as shipped (``authors_sim``
     without an estimator argument: it runs the authors' observer)."""
-    base = preset_config(mode if mode in ("paper", "authors_sim", "lift_watch") else "default")
+    base = preset_config(mode if mode in ("paper", "authors_sim", "lift_watch", "keep_carried")
+                         else "default")
     if mode == "impact_unguarded":
         base = replace(base, guard=replace(base.guard, enabled=False))
     return ("impedance" if mode == "impedance" else "impact"), base

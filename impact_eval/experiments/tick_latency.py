@@ -11,10 +11,13 @@ above its CPU time was preempted by the OS (a 2-core machine shared with other p
 robot PC runs the loop on an isolated core with a real-time kernel). Prints and writes
 (``DIR/latency.json``) the percentiles, the maximum and the count over the
 budget, for all ticks and for learning ticks (gate open), per learner of the shipped
-``default`` (contact guard on, libfranka's limits): ``numba`` (its learner since 2026-11-26:
-inside the tick, spread over ticks) and ``numpy`` (Python + BLAS after the tick, the learner
-before that date). Budget (issue 26): p99.9 <= 0.3 ms and max <= 0.8 ms per tick on one core
-of the 2-core development machine.
+``default`` (contact guard on, libfranka's limits), or of ``--preset NAME``: ``numba`` (its
+learner since 2026-11-26: inside the tick, spread over ticks) and ``numpy`` (Python + BLAS
+after the tick, the learner before that date). Budget (issue 26): p99.9 <= 0.3 ms and max
+<= 0.8 ms per tick on one core
+of the 2-core development machine. The gripper is commanded open on the first tick and
+closed from the second, so a preset's lift watch (``lift_watch``) arms and runs its counting
+path on every tick, as in a heavy lift it cannot see rise.
 """
 
 from __future__ import annotations
@@ -30,19 +33,20 @@ from pathlib import Path
 
 import numpy as np
 
-from impact_control.config import ControllerConfig
 from impact_control.controller import ImpactController
 from impact_control.ik import HOME_Q
+from impact_control.presets import PRESETS, preset_config
 from impact_eval.experiments.physics import Rig
 
 PAYLOADS_KG = (0.0, 2.5, 5.0)
 BUDGET_P999_S, BUDGET_MAX_S = 0.3e-3, 0.8e-3
 
 
-def measure(learner: str, seconds: float, switch_s: float, seed: int) -> dict[str, np.ndarray]:
+def measure(learner: str, seconds: float, switch_s: float, seed: int,
+            preset: str = "default") -> dict[str, np.ndarray]:
     """Per-tick compute time [s] and learning flag over ``seconds`` of simulated hold."""
     rig = Rig.build("payload_scene.xml", "impact", "residual", seed)
-    base = ControllerConfig()  # the shipped default: guard on, libfranka's limits, numba
+    base = preset_config(preset)  # default: guard on, libfranka's limits, numba
     cfg = replace(base, internal_model=replace(base.internal_model, learner=learner))
     ctrl = ImpactController(rig.arm, cfg, mode="impact")
     rig = Rig(rig.sim, rig.arm, ctrl, rig.rng)
@@ -67,7 +71,8 @@ def measure(learner: str, seconds: float, switch_s: float, seed: int) -> dict[st
         q, dq, tau_meas = sim.read_sensors(rig.rng)
         width = sim.gripper_width()
         runs, c0, t0 = gc_runs[0], cpu_clock(), clock()
-        tau = ctrl.compute(q, dq, tau_meas, pos, quat, gripper_width_m=width)
+        tau = ctrl.compute(q, dq, tau_meas, pos, quat, gripper_width_m=width,
+                           gripper_cmd=1.0 if k else -1.0)
         cost[k] = (clock() - t0) * 1e-9
         cpu[k] = (cpu_clock() - c0) * 1e-9
         collected[k] = gc_runs[0] != runs
@@ -97,6 +102,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--learners", nargs="+", default=["numpy", "numba"],
                         choices=["numpy", "numba"])
+    parser.add_argument("--preset", default="default",
+                        choices=[p for p in PRESETS if not p.startswith("authors")])
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args(argv)
     if not (args.seconds > 0 and args.switch_s > 0):
@@ -104,13 +111,14 @@ def main(argv: list[str] | None = None) -> int:
     given = sys.argv[1:] if argv is None else argv
     report: dict[str, object] = {"command": "python -m impact_eval.experiments.tick_latency "
                                  + " ".join(given), "machine": platform.processor()
-                                 or platform.machine(), "seconds": args.seconds}
+                                 or platform.machine(), "seconds": args.seconds,
+                                 "preset": args.preset}
     print("| learner | ticks | SGD steps | p50 [us] | p99 [us] | p99.9 [us] | max [us] | > 0.3 ms "
           "| > 0.8 ms | learning ticks p99.9 [us] | learning ticks max [us] | budget met |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for learner in args.learners:
-        measure(learner, 1.0, args.switch_s, args.seed)  # compile and warm every kernel first
-        r = measure(learner, args.seconds, args.switch_s, args.seed)
+        measure(learner, 1.0, args.switch_s, args.seed, args.preset)  # compile and warm first
+        r = measure(learner, args.seconds, args.switch_s, args.seed, args.preset)
         every, learn = summarize(r["cost_s"]), summarize(r["cost_s"][r["learning"]])
         met = every["p999_us"] <= 300.0 and every["max_us"] <= 800.0
         slow = r["cost_s"] > BUDGET_MAX_S

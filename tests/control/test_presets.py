@@ -107,12 +107,14 @@ def test_warm_start_restores_weights_and_replay_at_every_reset() -> None:
     env.close()
 
 
-def test_lift_watch_is_default_plus_its_fields_only() -> None:
-    from impact_control.presets import LIFT_WATCH
+@pytest.mark.parametrize("name", ["keep_carried", "lift_watch"])
+def test_issue_54_presets_are_default_plus_their_fields_only(name: str) -> None:
+    from impact_control.presets import KEEP_CARRIED, LIFT_WATCH
 
-    watch, default = preset_config("lift_watch"), preset_config("default")
-    assert watch != default and preset_name(watch) == "lift_watch"
-    assert apply_overrides(default, [f"{k}={v}" for k, v in LIFT_WATCH.items()]) == watch
+    fields = {"keep_carried": KEEP_CARRIED, "lift_watch": LIFT_WATCH}[name]
+    watch, default = preset_config(name), preset_config("default")
+    assert watch != default and preset_name(watch) == name
+    assert apply_overrides(default, [f"{k}={v}" for k, v in fields.items()]) == watch
     assert dataclasses.replace(watch, saturation_release=default.saturation_release) == default
     assert default.saturation_release.lift_watch_s == float("inf")  # off in default
     assert not default.saturation_release.spare_carried

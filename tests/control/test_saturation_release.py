@@ -114,7 +114,7 @@ def test_on_in_default_only_and_off_through_an_override() -> None:
     from impact_control.presets import PRESETS, preset_config
 
     for name in PRESETS:
-        on = name in ("default", "lift_watch")
+        on = name in ("default", "keep_carried", "lift_watch")
         assert preset_config(name).saturation_release.enabled == on, name
     assert ControllerConfig().saturation_release == SaturationReleaseConfig(
         enabled=True, hold_s=0.5, release_tau_s=0.25, recover_tau_s=2.0, margin_nm=0.1,
