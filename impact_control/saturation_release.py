@@ -27,7 +27,8 @@ and ``tau_max`` its bound:
    tick before it computes the next one (``saturation_release_restore``): a masked axis keeps
    its last unmasked value, which must not be scaled twice.
 
-**Lift watch** (``lift_watch_s`` finite; off in ``default``, on in ``carry``, issue 54): the
+**Lift watch** (``lift_watch_s`` finite; off in ``default``, on in the experimental
+``lift_watch`` preset, issue 54): the
 load is fed forward only while the arm really carries it. A gripper *close* (the command goes
 from open, <= 0, to closed, > 0) arms it and keeps the TCP's lowest height since (``z_low``).
 The lift is *seen* once the TCP rises ``lift_min_m`` above ``z_low``. Until then, every tick
@@ -39,8 +40,10 @@ release and stays there until the gripper opens (which disarms the watch) or the
 ``tip_hold_s`` finite (off in every preset: it ended every press on the tuning seeds and
 lost 13-17 of 28 lifts from 7 kg up, docs/controller.md), some joint at its bound for that long
 in all since the close, before the lift is seen, stalls the lift too. With
-``spare_carried`` the saturation release above does not act once the lift is seen (a load
-the arm has lifted is carried, not let go, while the wrist is at its bound). Only the
+``spare_carried`` (on in ``keep_carried``, issue 54's preset, and in ``lift_watch``) the
+saturation release above does not act once the lift is seen (a load the arm has lifted is
+carried, not let go, while the wrist is at its bound); the close arms the bookkeeping and
+the lift is seen whatever ``lift_watch_s`` is. Only the
 gripper command, the TCP's height and the feedforward are read: what a real FR3 has. An
 episode that starts with the gripper closed (a tool already in the hand) never arms it.
 

@@ -5,7 +5,7 @@
         configuration, our TCP against the robot's O_T_EE, and the loop timing over S seconds
         of zero torques (the robot's gravity compensation alone)
     impact-robot hold --host HOST [--controller impact|impedance]
-                      [--preset default|paper|authors_real]
+                      [--preset default|paper|keep_carried|lift_watch|authors_real]
                       [--model pinocchio|franka] [--max-payload-kg KG] [--seconds S]
                       [--step-m DX,DY,DZ [--step-at-s T]] [--out DIR]
         hold the current TCP pose with the FR3 configuration (fci.fr3_config); DIR (new or

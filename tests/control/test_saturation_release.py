@@ -265,3 +265,30 @@ def test_the_tip_test_stalls_on_time_at_the_bound_in_all_before_the_lift() -> No
     assert sr.state.stalled[0] == 0.0 and sr.scale == 1.0
     with pytest.raises(InvalidArgumentError, match="tip_hold_s"):
         SaturationReleaseConfig(tip_hold_s=0.0)
+
+
+def test_keep_carried_releases_a_stall_on_the_table_and_spares_a_carried_load() -> None:
+    """``keep_carried`` (issue 54's preset): no watch timer (``lift_watch_s`` inf), only
+    ``spare_carried``. Before the lift is seen, a wrist at its bound with no rise is released
+    as in ``default`` (the Hammer stall); once the TCP has risen 20 mm since the close, the
+    wrist at its bound is spared (the HammerBasket carry); opening the hand ends the spare."""
+    from impact_control.presets import preset_config
+
+    kept = preset_config("keep_carried").saturation_release
+    assert math.isinf(kept.lift_watch_s) and kept.spare_carried and math.isinf(kept.tip_hold_s)
+    stall = _watch(lift_watch_s=math.inf, spare_carried=True)
+    _close(stall)
+    for _ in range(500):  # pushing up at the bound, never rising: the release acts
+        stall.step(WRIST_AT_BOUND, TAU_MAX, UP, z_tcp_m=0.0, gripper_cmd=1.0)
+    assert stall.state.stalled[0] == 0.0 and stall.scale < 1e-6  # the release, not the watch
+    carried = _watch(lift_watch_s=math.inf, spare_carried=True)
+    _close(carried)
+    carried.step(FREE, TAU_MAX, UP, z_tcp_m=0.02, gripper_cmd=1.0)  # 20 mm up: lifted
+    for _ in range(500):
+        w = carried.step(WRIST_AT_BOUND, TAU_MAX, UP, z_tcp_m=0.02, gripper_cmd=1.0)
+    np.testing.assert_array_equal(w, UP)
+    assert carried.state.releases[0] == 0.0
+    carried.step(FREE, TAU_MAX, UP, z_tcp_m=0.02, gripper_cmd=-1.0)  # set down and opened
+    for _ in range(500):  # a new stall without a close: released as in default
+        carried.step(WRIST_AT_BOUND, TAU_MAX, UP, z_tcp_m=0.02, gripper_cmd=-1.0)
+    assert carried.scale < 1e-6

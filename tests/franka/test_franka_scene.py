@@ -88,7 +88,9 @@ def test_a_push_is_taken_up(tmp_path) -> None:
     assert ticks["wrench_pred_x_n"].iloc[-1] == pytest.approx(-20.0, rel=0.05)
 
 
-def test_pick_place_carries_an_undeclared_dumbbell(tmp_path) -> None:
+@pytest.mark.parametrize("preset", [
+    "default", pytest.param("keep_carried", marks=pytest.mark.slow)])  # issue 54's preset
+def test_pick_place_carries_an_undeclared_dumbbell(tmp_path, preset: str) -> None:
     """The paper's dumbbell task: a 2 kg cylinder (franky_scene_server's pick-and-place
     scene) picked from the table, carried 30 cm and set down, the hand through pylibfranka's
     ``Gripper`` (franky-sim's gripper server on :1338), the load never declared. The budget
@@ -103,7 +105,7 @@ def test_pick_place_carries_an_undeclared_dumbbell(tmp_path) -> None:
         while not log.exists() and time.monotonic() < deadline:
             time.sleep(0.1)
         start = json.loads(log.read_text().splitlines()[-1])["pos_m"]
-        status = main(["pick-place", *SIM_BUDGET,
+        status = main(["pick-place", *SIM_BUDGET, "--preset", preset,
                        "--host", host, "--pick", "0.55,-0.15,0.36", "--place",
                        "0.55,0.15,0.362", "--grasp-width-m", "0", "--grasp-epsilon-m", "0.05",
                        "--max-payload-kg", "2", "--seconds", "40",
@@ -120,7 +122,9 @@ def test_pick_place_carries_an_undeclared_dumbbell(tmp_path) -> None:
     assert run["report"]["stop_reason"] == ""
 
 
-def test_pick_place_under_franka_sim_s_checks(tmp_path) -> None:
+@pytest.mark.parametrize("preset", [
+    "default", pytest.param("keep_carried", marks=pytest.mark.slow)])  # issue 54's preset
+def test_pick_place_under_franka_sim_s_checks(tmp_path, preset: str) -> None:
     """The same sequence (no object: franka-sim has none) under franka-sim's communication
     and motion-limit checks, with its gripper server: no reflex, every step done (the
     simulator's budget allowance, franka_servers.SIM_BUDGET_MS: CI's shared cores once gave
@@ -130,7 +134,7 @@ def test_pick_place_under_franka_sim_s_checks(tmp_path) -> None:
     python = simulator_python("IMPACT_FRANKA_SIM_PYTHON")
     with serving([python, str(HERE / "franka_sim_server.py"), "--gripper",
                   "--no-joint-friction"]) as host:
-        status = main(["pick-place", *SIM_BUDGET,
+        status = main(["pick-place", *SIM_BUDGET, "--preset", preset,
                        "--host", host, "--torque-source", "tau_J+g", "--pick",
                        "0.55,-0.15,0.36", "--place", "0.55,0.15,0.362", "--grasp-width-m",
                        "0", "--grasp-epsilon-m", "0.05", "--out", str(tmp_path / "run")])
