@@ -77,7 +77,7 @@ def test_a_robot_takes_authors_real_and_refuses_authors_sim_in_one_line() -> Non
         check_robot_preset("authors_sim")
     message = str(err.value)
     assert "\n" not in message and "use authors_real" in message
-    assert "valid: default, paper, lift_watch, authors_real" in message
+    assert "valid: default, paper, keep_carried, lift_watch, authors_real" in message
 
 
 def _controller(preset: str, mode: str = "impact"):

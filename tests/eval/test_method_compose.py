@@ -95,7 +95,8 @@ def test_a_composed_method_gives_its_shortcuts_rows(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(("method", "named"), [
     ("scripted+impact@",
-     "invalid preset ''; valid choices: default, paper, lift_watch, authors_sim"),
+     "invalid preset ''; valid choices: default, paper, keep_carried, lift_watch, "
+     "authors_sim"),
     ("scripted+impedance+warm", "valid: warm on the impact controller"),
 ])
 def test_an_empty_preset_or_a_cold_warm_flag_stops_the_cli_before_anything_is_written(

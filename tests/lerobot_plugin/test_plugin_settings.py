@@ -39,7 +39,7 @@ def test_defaults() -> None:
                           "Disturbance-v1, HammerBasket-v1"),
     ({"controller": "pid"}, "valid choices: impedance, impact"),
     ({"controller_preset": "fast"},
-     "valid choices: default, paper, lift_watch, authors_sim, authors_real"),
+     "valid choices: default, paper, keep_carried, lift_watch, authors_sim, authors_real"),
     ({"obs_mode": "rgbd"}, "valid choices: state, rgb, state+rgb"),
     ({"object_mass": 20.0}, "valid: 0.05 to 12.0 kg"),
     ({"object_mass": 1.0, "mass_bin": (1.0, 2.0)}, "valid: one of them"),
