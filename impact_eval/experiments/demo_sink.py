@@ -1,0 +1,153 @@
+"""``python -m impact_eval.experiments.demo_sink``: does a mass-blind demonstrator carry a
+heavier hammer over the basket wall? (issue 55 item 1, no training)
+
+Runs, on ``IMPACT/HammerBasket-v1`` under their baselines' controller (plain impedance with
+the ``authors_sim`` preset: their impedance, limits and target filter, no observer, no
+feedforward), two demonstrators whose height offset is the one of a ``--offset-kg`` hammer
+whatever the hammer weighs (what a Vanilla policy trained at one mass learns):
+
+- ``rebased``: the authors' demonstrator (``impact_envs.policies.authors_demonstrator``):
+  targets re-based on the measured TCP, at most 4 cm toward the waypoint per step, plus the
+  offset;
+- ``absolute``: our expert (``scripted_hammer_basket``, ``compensation="privileged"`` given
+  the ``--offset-kg`` mass): absolute targets ramped at 0.25 m/s, plus the same offset.
+
+Per episode it writes, over the steps on which the hand is closed, the hammer is lifted
+(origin 5 cm above the table) and its origin crosses the basket wall's band (within 10 cm
+outside to 5 cm inside the wall line, in x or y), the hammer's lowest point above the wall's
+top (``clearance_m``, from the geoms' bounding boxes; NaN if it never crossed closed) and the
+TCP's lowest height above the table (``crossing_tcp_m``); whether the hammer touched the
+basket before the hand opened (``hit``); and the success at the end (900 steps, 30 s). Rows
+go to ``--out`` (CSV), one per episode; episode seeds are ``seed + 1000 k + e`` for mass index
+``k``, so use seeds you do not report.
+
+    python -m impact_eval.experiments.demo_sink --masses 0.75,1.25,1.75 --episodes 20 \\
+        --seed 0 --out results/hammer_basket_diag/demo_sink.csv
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+ENV_ID = "IMPACT/HammerBasket-v1"
+DEMOS = ("rebased", "absolute")
+COLUMNS = ("demo", "offset_kg", "mass_kg", "seed", "episode", "success", "hit", "clearance_m",
+           "crossing_tcp_m")
+
+
+def _aabb_z(model, data, geoms: np.ndarray) -> tuple[float, float]:
+    """(lowest, highest) world z of the geoms' bounding boxes [m]."""
+    low, high = math.inf, -math.inf
+    for g in geoms:
+        rot = data.geom_xmat[g].reshape(3, 3)
+        centre = data.geom_xpos[g] + rot @ model.geom_aabb[g, :3]
+        reach = float(np.abs(rot[2]) @ model.geom_aabb[g, 3:])
+        low, high = min(low, centre[2] - reach), max(high, centre[2] + reach)
+    return low, high
+
+
+def _touching(data, first: np.ndarray, second: np.ndarray) -> bool:
+    """Whether a geom of ``first`` touches a geom of ``second``."""
+    pairs = data.contact.geom[: data.ncon]
+    a, b = np.isin(pairs[:, 0], first), np.isin(pairs[:, 1], second)
+    c, e = np.isin(pairs[:, 1], first), np.isin(pairs[:, 0], second)
+    return bool(np.any((a & b) | (c & e)))
+
+
+def _policy(demo: str, offset_kg: float):
+    from impact_envs.policies.authors_demonstrator import RebasedDemonstrator
+    from impact_envs.policies.scripted_hammer_basket import hammer_basket_expert
+
+    if demo == "rebased":
+        return RebasedDemonstrator(offset_mass_kg=offset_kg)
+    return hammer_basket_expert("privileged")
+
+
+def run_cell(args: tuple[str, float, float, int, int, int]) -> list[dict[str, object]]:
+    """The rows of one (demo, offset, mass) cell's episodes."""
+    import gymnasium as gym
+
+    import impact_envs  # noqa: F401 - registers the envs
+    from impact_control.policy import stack_obs
+    from impact_envs.tasks.hammer_basket import SUCCESS_HALF_M, TABLE_TOP_M
+
+    demo, offset_kg, mass, seed, k, episodes = args
+    env = gym.make(ENV_ID, controller="impedance", controller_preset="authors_sim")
+    sim = env.unwrapped.sim
+    m, d = sim.model, sim.data
+    hammer = np.flatnonzero(m.geom_bodyid == m.body("hammer").id)
+    basket = np.flatnonzero(m.geom_bodyid == m.body("basket").id)
+    policy, rows = _policy(demo, offset_kg), []
+    for e in range(episodes):
+        obs, _ = env.reset(seed=seed + 1000 * k + e, options={"object_mass": mass})
+        policy.reset(1, np.array([offset_kg]))
+        clearance, hit, tcp_min, info = math.inf, False, math.inf, {}
+        for _ in range(900):
+            action = np.asarray(policy.act(stack_obs([obs]))[0])
+            obs, _, _, _, info = env.step(action)
+            closed = action[-1] > 0.0
+            lifted = float(obs["object_pos"][2]) > TABLE_TOP_M + 0.05
+            if not (closed and lifted):
+                continue
+            rel = np.abs(d.xpos[m.body("hammer").id, :2] - obs["goal_pos"][:2])
+            crossing = np.all(rel <= SUCCESS_HALF_M + 0.1) and np.any(rel >= SUCCESS_HALF_M - 0.05)
+            if crossing:  # over the wall's band, not yet over the basket's middle
+                tcp_min = min(tcp_min, float(obs["ee_pos"][2]) - TABLE_TOP_M)
+                wall_top = _aabb_z(m, d, basket)[1]
+                clearance = min(clearance, _aabb_z(m, d, hammer)[0] - wall_top)
+            hit = hit or _touching(d, hammer, basket)
+        rows.append({"demo": demo, "offset_kg": offset_kg, "mass_kg": mass,
+                     "seed": seed + 1000 * k + e, "episode": e,
+                     "success": int(bool(info.get("is_success", False))), "hit": int(hit),
+                     "clearance_m": clearance if math.isfinite(clearance) else math.nan,
+                     "crossing_tcp_m": tcp_min if math.isfinite(tcp_min) else math.nan})
+    env.close()
+    return rows
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point."""
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--masses", default="0.75,1.25,1.75", help="comma list [kg]")
+    p.add_argument("--offset-kg", type=float, default=0.6)
+    p.add_argument("--demos", default=",".join(DEMOS))
+    p.add_argument("--episodes", type=int, default=20)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--out", type=Path, required=True)
+    args = p.parse_args(argv)
+    demos = [x for x in args.demos.split(",") if x]
+    bad = [x for x in demos if x not in DEMOS]
+    if bad or not demos:
+        p.error(f"invalid --demos {args.demos!r}; valid: a comma list of {', '.join(DEMOS)}")
+    try:
+        masses = [float(x) for x in args.masses.split(",") if x]
+    except ValueError:
+        p.error(f"invalid --masses {args.masses!r}; valid: a comma list of masses in kg")
+    if args.episodes < 1 or args.workers < 1 or not masses or min(masses) <= 0:
+        p.error("--episodes and --workers must be >= 1 and --masses > 0")
+    cells = [(demo, args.offset_kg, mass, args.seed, k, args.episodes)
+             for demo in demos for k, mass in enumerate(masses)]
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    with args.out.open("w", newline="") as f, ProcessPoolExecutor(args.workers) as pool:
+        writer = csv.DictWriter(f, fieldnames=COLUMNS)
+        writer.writeheader()
+        for rows in pool.map(run_cell, cells):
+            writer.writerows(rows)
+            f.flush()
+            r = rows[0]
+            ok = [x for x in rows if not math.isnan(x["clearance_m"])]
+            median = np.median([x["clearance_m"] for x in ok]) if ok else math.nan
+            print(f"{r['demo']} {r['mass_kg']} kg: success {sum(x['success'] for x in rows)}/"
+                  f"{len(rows)}, hit the basket {sum(x['hit'] for x in rows)}, clearance over "
+                  f"the wall median {median:.3f} m", flush=True)
+
+
+if __name__ == "__main__":
+    main()
