@@ -49,7 +49,8 @@ from impact_learn.dataset import EpisodeMeta, ReplayWriter
 
 
 def default_env_factory(cfg: CollectConfig) -> Callable[[], gym.Env]:
-    """Factory of ``gym.make(env_id, controller=...)`` with the fixed parameter value.
+    """Factory of ``gym.make(env_id, controller=..., controller_preset=...)`` with the fixed
+    parameter value.
 
     The value goes to the env's own swept parameter (``env.param_name``): the ``object_mass``
     kwarg for Hammer and Dumbbell (and envs without ``param_name``), ``task_params`` for the
@@ -57,14 +58,17 @@ def default_env_factory(cfg: CollectConfig) -> Callable[[], gym.Env]:
     """
 
     def make() -> gym.Env:
-        env = gym.make(cfg.env_id, controller=cfg.controller)
+        kwargs: dict[str, object] = {"controller": cfg.controller}
+        if cfg.controller_preset != "default":  # an env without presets still takes default
+            kwargs["controller_preset"] = cfg.controller_preset
+        env = gym.make(cfg.env_id, **kwargs)
         if cfg.param is None:
             return env
         name = getattr(env.unwrapped, "param_name", "object_mass")
         env.close()
         value = ({"object_mass": cfg.param} if name == "object_mass"
                  else {"task_params": {name: cfg.param}})
-        return gym.make(cfg.env_id, controller=cfg.controller, **value)
+        return gym.make(cfg.env_id, **kwargs, **value)
 
     return make
 
@@ -87,7 +91,7 @@ def store_attrs(cfg: CollectConfig, param_name: str) -> dict:
         "param_name": param_name,
         "param_spec": cfg.param_spec(),
         "controller": cfg.controller,
-        "controller_preset": "default",  # gym.make's default; the demos' IMPACT settings
+        "controller_preset": cfg.controller_preset,
         "expert": {"name": "scripted", "compensation": cfg.compensation},
         "seed": cfg.seed,
         "post_success_steps": cfg.post_success_steps,
@@ -189,6 +193,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--compensation", default="none",
         help="how the expert meets a load's sag: none | closed_loop | privileged (ablation)")
     parser.add_argument("--controller", default="impedance", help="impedance | impact")
+    parser.add_argument("--controller-preset", default="default",
+                        help="the controller's named configuration, e.g. authors_sim (with "
+                             "--controller impedance: the authors' baselines' controller)")
     parser.add_argument("--seed", type=int, default=0, help="base seed")
     parser.add_argument(
         "--post-success-steps",
@@ -243,6 +250,7 @@ def config_from_args(args: argparse.Namespace) -> CollectConfig:
         param_list=param_list,
         compensation=args.compensation,
         controller=args.controller,
+        controller_preset=args.controller_preset,
         seed=args.seed,
         post_success_steps=args.post_success_steps,
         n_envs=args.n_envs,

@@ -7,6 +7,7 @@ from typing import Any
 
 from impact_control.controller import CONTROLLERS
 from impact_control.errors import InvalidArgumentError, check_choice
+from impact_control.presets import PRESETS
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.parallel import check_executor
 from impact_envs.versions import check_not_retired
@@ -33,6 +34,9 @@ class CollectConfig:
             teleoperator's integral on the observed height error) or ``privileged`` (m g / K
             from the mass; an ablation). ``policies/scripted.py``.
         controller: Low-level controller of the env: ``impedance`` or ``impact``.
+        controller_preset: The controller's named configuration (``presets.PRESETS``):
+            ``default``, or e.g. ``authors_sim``, whose impedance, limits and target filter
+            are the authors' baselines' controller under ``controller="impedance"`` (issue 55).
         seed: Base seed; attempt k is seeded by ``(seed, k)``.
         post_success_steps: Steps recorded after the first step with ``info["is_success"]``
             before the attempt ends [policy steps] (envs need not terminate on success).
@@ -56,6 +60,7 @@ class CollectConfig:
     param_list: tuple[float, ...] | None = None
     compensation: str = "none"
     controller: str = "impedance"
+    controller_preset: str = "default"
     seed: int = 0
     post_success_steps: int = 15
     n_envs: int = 8
@@ -69,6 +74,7 @@ class CollectConfig:
     def __post_init__(self) -> None:
         check_not_retired(self.env_id)
         check_choice("controller", self.controller, CONTROLLERS)
+        check_choice("controller preset", self.controller_preset, PRESETS)
         check_choice("compensation", self.compensation, COMPENSATIONS)
         check_executor(self.executor, self.ray_address)
         if not isinstance(self.observation, ObservationOptions):
