@@ -136,8 +136,9 @@ class RebasedDemonstrator:
         if self.target[i] is None:
             self._start(i, o)
         w, p = self.waypoint(i, o["goal_pos"]), o["ee_pos"]
-        if phase in (GRASP, HOLD, RELEASE) and self.target[i] is not None:
-            target = self.target[i]  # their hold_position: republish the last target
+        held = phase in (GRASP, HOLD, RELEASE)
+        if held:  # their hold_position: republish the last target (set by the phase before)
+            target = self.target[i]
         else:
             d = float(np.linalg.norm(w - p))
             target = p + min(1.0, s.max_step_m / d if d > 0.0 else 1.0) * (w - p)
@@ -146,7 +147,6 @@ class RebasedDemonstrator:
         self.target[i] = target
         self.steps[i] += 1
         tol = s.tol_near_m if phase <= LIFT else s.tol_transit_m
-        held = phase in (GRASP, HOLD, RELEASE)
         timeout = self.steps[i] >= round(s.timeouts_s[phase] * POLICY_HZ)
         if phase < UP and (timeout or (not held and np.linalg.norm(p - w) < tol)):
             self.phase[i], self.steps[i] = phase + 1, 0

@@ -92,6 +92,15 @@ def _as_slice(indices: list[int]) -> slice | np.ndarray:
     return idx
 
 
+def contact_force_world(model: mujoco.MjModel, data: mujoco.MjData, i: int) -> np.ndarray:
+    """Contact ``i``'s full force (normal and friction, ``mujoco.mj_contactForce``) on its
+    geom 2, in world axes [N] (3,); the force on geom 1 is its negative (MuJoCo's normal
+    points from geom 1 to geom 2)."""
+    force = np.zeros(6)
+    mujoco.mj_contactForce(model, data, i, force)  # in the contact frame
+    return data.contact.frame[i].reshape(3, 3).T @ force[:3]
+
+
 class FrankaSim:
     """A MuJoCo scene that contains the FR3 + Hand (``fr3_hand.xml``) and task objects.
 
@@ -411,14 +420,13 @@ class FrankaSim:
         and a wall, whose normals cancel against its friction, gives its weight too, where
         ``contact_forces`` sums kilonewtons of normals (docs/hammer_basket.md, "Contact after
         a success"). Finger-object contacts are excluded (the grasp)."""
-        m, d, group = self.model, self.data, self.geom_group
-        net, force = np.zeros(3), np.zeros(6)
+        d, group = self.data, self.geom_group
+        net = np.zeros(3)
         for i in range(d.ncon):
             g1, g2 = group[d.contact.geom[i, 0]], group[d.contact.geom[i, 1]]
             if {g1, g2} != {GROUP_OBJECT, GROUP_OTHER} or d.contact.efc_address[i] < 0:
                 continue
-            mujoco.mj_contactForce(m, d, i, force)  # on geom 2, in the contact frame
-            world = d.contact.frame[i].reshape(3, 3).T @ force[:3]
+            world = contact_force_world(self.model, d, i)
             net += world if g2 == GROUP_OBJECT else -world
         return float(np.linalg.norm(net))
 

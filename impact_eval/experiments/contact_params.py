@@ -12,7 +12,8 @@ pair sets none).
 
 from __future__ import annotations
 
-import argparse
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError, InvalidArgumentError
 
 
 def lines(env_id: str) -> list[str]:
@@ -20,9 +21,14 @@ def lines(env_id: str) -> list[str]:
     import gymnasium as gym
 
     import impact_envs  # noqa: F401 - registers the envs
+    from impact_eval.envs import check_env_id
 
-    env = gym.make(env_id)
+    env = gym.make(check_env_id(env_id))
     m = env.unwrapped.sim.model
+    if "hammer" not in (m.body(i).name for i in range(m.nbody)):
+        env.close()
+        raise InvalidArgumentError(f"--env {env_id!r} has no body named hammer; valid: "
+                                   "IMPACT/HammerBasket-v1 or IMPACT/Hammer-v1")
     out = [f"noslip_iterations {m.opt.noslip_iterations}, cone {m.opt.cone} (1: elliptic), "
            f"impratio {m.opt.impratio:g}, timestep {m.opt.timestep:g} s"]
     hammer = m.body("hammer").id
@@ -43,13 +49,14 @@ def lines(env_id: str) -> list[str]:
 
 def main(argv: list[str] | None = None) -> None:
     """Entry point."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = OneLineParser(description=__doc__.splitlines()[0])
     p.add_argument("--env", default="IMPACT/HammerBasket-v1")
     args = p.parse_args(argv)
-    if "hammer" not in args.env.lower():
-        p.error(f"invalid --env {args.env!r}; valid: an env with a hammer, e.g. "
-                "IMPACT/HammerBasket-v1")
-    print("\n".join(lines(args.env)))
+    try:
+        report = lines(args.env)
+    except ImpactError as exc:
+        p.fail(" ".join(str(exc).split()))
+    print("\n".join(report))
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ import numpy as np
 from impact_control.cli import OneLineParser
 from impact_control.errors import ImpactError
 from impact_control.policy import stack_obs
+from impact_envs.robot.sim import contact_force_world
 from impact_eval.experiments.trace import open_method, start_episode
 
 
@@ -37,7 +38,7 @@ def contact_lines(model: mujoco.MjModel, data: mujoco.MjData, body: str) -> list
         mujoco.mj_contactForce(model, data, i, f6)
         frame = c.frame.reshape(3, 3)
         sign = 1.0 if bodies[1] == target else -1.0  # MuJoCo's normal: geom 1 -> geom 2
-        net += sign * (frame.T @ f6[:3])
+        net += sign * contact_force_world(model, data, i)
         net_normal += sign * f6[0] * frame[0]
         lines.append(f"{model.geom(c.geom[0]).name}-{model.geom(c.geom[1]).name}: normal "
                      f"{f6[0]:.0f} N along {np.round(frame[0], 3).tolist()}, penetration "

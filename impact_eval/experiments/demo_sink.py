@@ -2,9 +2,10 @@
 heavier hammer over the basket wall? (issue 55 item 1, no training)
 
 Runs, on ``IMPACT/HammerBasket-v1`` under their baselines' controller (plain impedance with
-the ``authors_sim`` preset: their impedance, limits and target filter, no observer, no
-feedforward), two demonstrators whose height offset is the one of a ``--offset-kg`` hammer
-whatever the hammer weighs (what a Vanilla policy trained at one mass learns):
+the ``authors_sim`` preset: their impedance, limits and target filter, no feedforward; their
+observer runs but nothing reads it), two demonstrators whose height offset is the one of a
+``--offset-kg`` hammer whatever the hammer weighs (what a Vanilla policy trained at one mass
+learns):
 
 - ``rebased``: the authors' demonstrator (``impact_envs.policies.authors_demonstrator``):
   targets re-based on the measured TCP, at most 4 cm toward the waypoint per step, plus the
@@ -17,9 +18,10 @@ Per episode it writes, over the steps on which the hand is closed, the hammer is
 outside to 5 cm inside the wall line, in x or y), the hammer's lowest point above the wall's
 top (``clearance_m``, from the geoms' bounding boxes; NaN if it never crossed closed) and the
 TCP's lowest height above the table (``crossing_tcp_m``); whether the hammer touched the
-basket before the hand opened (``hit``); and the success at the end (900 steps, 30 s). Rows
-go to ``--out`` (CSV), one per episode; episode seeds are ``seed + 1000 k + e`` for mass index
-``k``, so use seeds you do not report.
+basket while carried (hand closed, hammer lifted: ``hit``); and the success at the end (900
+steps, 30 s). Rows go to ``--out`` (CSV, a new file: an existing one is refused, nothing is
+overwritten), one per episode, cell by cell as they finish; episode seeds are
+``seed + 1000 k + e`` for mass index ``k``, so use seeds you do not report.
 
     python -m impact_eval.experiments.demo_sink --masses 0.75,1.25,1.75 --episodes 20 \\
         --seed 0 --out results/hammer_basket_diag/demo_sink.csv
@@ -27,13 +29,15 @@ go to ``--out`` (CSV), one per episode; episode seeds are ``seed + 1000 k + e`` 
 
 from __future__ import annotations
 
-import argparse
 import csv
 import math
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+
+from impact_control.cli import OneLineParser
+from impact_control.errors import ImpactError
 
 ENV_ID = "IMPACT/HammerBasket-v1"
 DEMOS = ("rebased", "absolute")
@@ -111,9 +115,23 @@ def run_cell(args: tuple[str, float, float, int, int, int]) -> list[dict[str, ob
     return rows
 
 
+def _check_masses(masses: list[float]) -> None:
+    """Each mass in the task's range (one-line ``ImpactError`` otherwise)."""
+    import gymnasium as gym
+
+    import impact_envs  # noqa: F401 - registers the envs
+
+    env = gym.make(ENV_ID)
+    try:
+        for mass in masses:
+            env.unwrapped.task.param("object_mass").validate(mass)
+    finally:
+        env.close()
+
+
 def main(argv: list[str] | None = None) -> None:
-    """Entry point."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    """Entry point; bad input exits 2 with one line, before anything is written."""
+    p = OneLineParser(description=__doc__.splitlines()[0])
     p.add_argument("--masses", default="0.75,1.25,1.75", help="comma list [kg]")
     p.add_argument("--offset-kg", type=float, default=0.6)
     p.add_argument("--demos", default=",".join(DEMOS))
@@ -123,19 +141,26 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--out", type=Path, required=True)
     args = p.parse_args(argv)
     demos = [x for x in args.demos.split(",") if x]
-    bad = [x for x in demos if x not in DEMOS]
-    if bad or not demos:
-        p.error(f"invalid --demos {args.demos!r}; valid: a comma list of {', '.join(DEMOS)}")
+    if not demos or any(x not in DEMOS for x in demos):
+        p.fail(f"invalid --demos {args.demos!r}; valid: a comma list of {', '.join(DEMOS)}")
     try:
         masses = [float(x) for x in args.masses.split(",") if x]
     except ValueError:
-        p.error(f"invalid --masses {args.masses!r}; valid: a comma list of masses in kg")
-    if args.episodes < 1 or args.workers < 1 or not masses or min(masses) <= 0:
-        p.error("--episodes and --workers must be >= 1 and --masses > 0")
+        p.fail(f"invalid --masses {args.masses!r}; valid: a comma list of masses in kg")
+    if args.episodes < 1 or args.workers < 1 or not masses:
+        p.fail("--episodes and --workers must be >= 1 and --masses name at least one mass")
+    if not (0.0 < args.offset_kg < math.inf):
+        p.fail(f"invalid --offset-kg {args.offset_kg}; valid: a mass > 0 [kg]")
+    if args.out.exists():
+        p.fail(f"--out {str(args.out)!r} exists; valid: a new file (nothing is overwritten)")
+    try:
+        _check_masses(masses)
+    except ImpactError as exc:
+        p.fail(" ".join(str(exc).split()))
     cells = [(demo, args.offset_kg, mass, args.seed, k, args.episodes)
              for demo in demos for k, mass in enumerate(masses)]
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    with args.out.open("w", newline="") as f, ProcessPoolExecutor(args.workers) as pool:
+    with args.out.open("x", newline="") as f, ProcessPoolExecutor(args.workers) as pool:
         writer = csv.DictWriter(f, fieldnames=COLUMNS)
         writer.writeheader()
         for rows in pool.map(run_cell, cells):
@@ -147,7 +172,6 @@ def main(argv: list[str] | None = None) -> None:
             print(f"{r['demo']} {r['mass_kg']} kg: success {sum(x['success'] for x in rows)}/"
                   f"{len(rows)}, hit the basket {sum(x['hit'] for x in rows)}, clearance over "
                   f"the wall median {median:.3f} m", flush=True)
-
 
 if __name__ == "__main__":
     main()

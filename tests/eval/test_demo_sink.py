@@ -1,0 +1,48 @@
+"""``experiments.demo_sink`` and ``experiments.contact_params`` (issue 55): bad input is one
+line, exit 2, and nothing is written or overwritten."""
+
+from __future__ import annotations
+
+import pytest
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--masses", "0.75,abc"], "invalid --masses '0.75,abc'"),
+    (["--masses", "50"], "object_mass=50.0 out of range; valid: 0.05 to 12.0 kg"),
+    (["--demos", "theirs"], "valid: a comma list of rebased, absolute"),
+    (["--offset-kg", "0"], "invalid --offset-kg 0.0"),
+    (["--episodes", "0"], "--episodes and --workers must be >= 1"),
+])
+def test_demo_sink_refuses_bad_input_in_one_line(tmp_path, capsys, argv, message) -> None:
+    from impact_eval.experiments.demo_sink import main
+
+    out = tmp_path / "rows.csv"
+    with pytest.raises(SystemExit) as exit_:
+        main([*argv, "--out", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and "\n" not in err and message in err
+    assert not out.exists()
+
+
+def test_demo_sink_never_overwrites_rows(tmp_path, capsys) -> None:
+    from impact_eval.experiments.demo_sink import main
+
+    out = tmp_path / "rows.csv"
+    out.write_text("kept\n")
+    with pytest.raises(SystemExit) as exit_:
+        main(["--out", str(out)])
+    assert exit_.value.code == 2 and "nothing is overwritten" in capsys.readouterr().err
+    assert out.read_text() == "kept\n"
+
+
+def test_contact_params_reads_the_pairs_and_refuses_an_env_without_a_hammer(capsys) -> None:
+    from impact_eval.experiments.contact_params import lines, main
+
+    report = lines("IMPACT/HammerBasket-v1")
+    assert report[0].startswith("noslip_iterations 1")
+    pairs = [r for r in report if r.startswith("pair ")]
+    assert len(pairs) == 4 and all("solref [0.02, 1.0]" in r for r in pairs)
+    with pytest.raises(SystemExit) as exit_:
+        main(["--env", "IMPACT/Dumbbell-v1"])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and "\n" not in err and "no body named hammer" in err
