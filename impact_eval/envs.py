@@ -55,6 +55,17 @@ def check_env_id(env_id: str) -> str:
     return bare_id
 
 
+def check_masses(env_id: str, masses: Sequence[float]) -> None:
+    """One-line ``InvalidArgumentError`` for a mass outside ``env_id``'s ``object_mass`` range
+    (checked before a run writes anything)."""
+    env = gym.make(env_id)
+    try:
+        for mass in masses:
+            env.unwrapped.task.param("object_mass").validate(mass)
+    finally:
+        env.close()
+
+
 def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
              preset: str = "default", render: bool = False,
              observation: object | None = None, robot: object | None = None,

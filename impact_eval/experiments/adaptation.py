@@ -59,6 +59,7 @@ from impact_envs.envs.options import RobotOptions, apply_robot_overrides
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.scripted import PickPlaceExpert
 from impact_envs.versions import check_not_retired
+from impact_eval.envs import check_masses
 from impact_franka.figures import plot_protocol
 
 PHASES = ("A", "B", "C")
@@ -222,16 +223,6 @@ def summarize(metrics: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _check_masses(env_id: str, masses: tuple[float, ...]) -> None:
-    """One-line ``InvalidArgumentError`` for a mass outside the env's range (before any file)."""
-    env = gym.make(env_id)
-    try:
-        for mass in masses:
-            env.unwrapped.task.param("object_mass").validate(mass)
-    finally:
-        env.close()
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = OneLineParser(prog="impact-protocol", description=__doc__.splitlines()[0])
     parser.add_argument("--env", default="IMPACT/Dumbbell-v1")
@@ -248,7 +239,7 @@ def main(argv: list[str] | None = None) -> int:
         check_not_retired(args.env)  # a retired id: the line naming its current id
         check_choice("env", args.env, impact_envs.ENV_IDS)
         masses = tuple(float(m) for m in args.masses.split(","))
-        _check_masses(args.env, masses)
+        check_masses(args.env, masses)
         if args.repeats < 1:
             raise ValueError(f"--repeats must be >= 1, got {args.repeats}")
         protocol_expert(args.env, args.hold_s)  # validates env and hold

@@ -38,6 +38,7 @@ import numpy as np
 
 from impact_control.cli import OneLineParser
 from impact_control.errors import ImpactError
+from impact_eval.envs import check_masses
 
 ENV_ID = "IMPACT/HammerBasket-v1"
 DEMOS = ("rebased", "absolute")
@@ -115,20 +116,6 @@ def run_cell(args: tuple[str, float, float, int, int, int]) -> list[dict[str, ob
     return rows
 
 
-def _check_masses(masses: list[float]) -> None:
-    """Each mass in the task's range (one-line ``ImpactError`` otherwise)."""
-    import gymnasium as gym
-
-    import impact_envs  # noqa: F401 - registers the envs
-
-    env = gym.make(ENV_ID)
-    try:
-        for mass in masses:
-            env.unwrapped.task.param("object_mass").validate(mass)
-    finally:
-        env.close()
-
-
 def main(argv: list[str] | None = None) -> None:
     """Entry point; bad input exits 2 with one line, before anything is written."""
     p = OneLineParser(description=__doc__.splitlines()[0])
@@ -154,7 +141,7 @@ def main(argv: list[str] | None = None) -> None:
     if args.out.exists():
         p.fail(f"--out {str(args.out)!r} exists; valid: a new file (nothing is overwritten)")
     try:
-        _check_masses(masses)
+        check_masses(ENV_ID, masses)
     except ImpactError as exc:
         p.fail(" ".join(str(exc).split()))
     cells = [(demo, args.offset_kg, mass, args.seed, k, args.episodes)
