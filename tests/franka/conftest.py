@@ -36,13 +36,3 @@ def franka_sim():
     with serving([python, str(HERE.joinpath("franka_sim_server.py"))]) as host:
         yield host
 
-
-
-
-@pytest.fixture()
-def franka_sim_no_friction():
-    """franka-sim as ``franka_sim``, the arm's joints without Coulomb friction
-    (franka_sim_server.py ``--no-joint-friction``)."""
-    python = simulator_python("IMPACT_FRANKA_SIM_PYTHON")
-    with serving([python, str(HERE / "franka_sim_server.py"), "--no-joint-friction"]) as host:
-        yield host

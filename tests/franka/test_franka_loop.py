@@ -15,10 +15,13 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 from franka_servers import (
+    HERE,
     SIM_BUDGET,
     SIM_BUDGET_MS,
     assert_no_abort_by_the_robot_s_rule,
     port_open,
+    serving,
+    simulator_python,
 )
 
 from impact_control.errors import ImpactError, InvalidArgumentError
@@ -109,50 +112,70 @@ def test_franka_sim_hold_with_the_robot_s_checks_on(franka_sim, capsys) -> None:
     assert "robot errors: none" in out and "MODEL MISMATCH: jacobian" in out
 
 
-def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(franka_sim_no_friction, tmp_path,
-                                                               monkeypatch) -> None:
+COMMUNICATION_LOSS = '["communication_constraints_violation"]'
+"""The robot's only error when 20 cycles in a row went unanswered: on a shared 2-core host the
+simulator's physics and our loop compete for the cores (CI once served states at 723 Hz, our
+loop's compute p99.9 3.1 ms), so this verdict is about the host, every other error about us."""
+
+
+def _hold_step_sigint(host: str, out, monkeypatch) -> int:
+    """``impact-robot hold`` for 30 s with a 5 cm step down at 10 s and SIGINT 20 s after the
+    loop started (warm-up and imports first); its exit code. The timer is cancelled on return."""
+    import threading
+
+    import impact_franka.runner as runner
+    from impact_franka.cli import main
+
+    started, done = threading.Event(), threading.Event()
+
+    def arm_timer() -> None:
+        if started.wait(120.0) and not done.wait(20.0):
+            os.kill(os.getpid(), signal.SIGINT)
+
+    original = runner.hold
+
+    def marked_hold(*args, **kwargs):
+        started.set()
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(runner, "hold", marked_hold)
+    timer = threading.Thread(target=arm_timer, daemon=True)
+    timer.start()
+    try:
+        return main(["hold", *SIM_BUDGET, "--host", host, "--seconds", "30", "--torque-source",
+                     "tau_J+g", "--step-m", "0,0,-0.05", "--step-at-s", "10", "--out", str(out)])
+    finally:
+        done.set()
+        timer.join()
+
+
+def test_franka_sim_30_s_hold_a_step_and_sigint_with_no_reflex(tmp_path, monkeypatch) -> None:
     """Under franka-sim's communication and motion-limit checks: a 30 s hold with a 5 cm step
     down at 10 s, then SIGINT at 20 s: no reflex, the robot's command success rate > 0.80,
     held within 1 mm before the step and 2 mm from 2 s after it, a clean exit 0 with the
     ticks up to the stop. The arm's joints are without Coulomb friction here: franka-sim's
     ``tau_J`` echoes the command, so friction reads as an external force that a real FR3's
     link-side sensors do not see; with our model's friction the TCP stops 5-10 mm short
-    (docs/franka.md, measured by hand)."""
-    import threading
+    (docs/franka.md, measured by hand).
+
+    A run that the robot stops for lost communication alone (``COMMUNICATION_LOSS``) is run
+    once more on a fresh simulator, and the first verdict is printed: the second must pass.
+    Any other error, or a second loss, fails."""
+    import json
 
     import pandas as pd
 
-    from impact_franka.cli import main
-
-    out = tmp_path / "run"
-
-    started = tmp_path / "started"  # beside --out: the run's folder is created after it
-
-    def arm_timer() -> None:  # SIGINT 20 s after the loop started (warm-up and imports first)
-        deadline = time.monotonic() + 120.0
-        while not started.exists() and time.monotonic() < deadline:
-            time.sleep(0.05)
-        time.sleep(20.0)
-        os.kill(os.getpid(), signal.SIGINT)
-
-    timer = threading.Thread(target=arm_timer, daemon=True)
-    timer.start()
-    import impact_franka.runner as runner
-
-    original = runner.hold
-
-    def marked_hold(*args, **kwargs):
-        started.touch()
-        return original(*args, **kwargs)
-
-    monkeypatch.setattr(runner, "hold", marked_hold)
-    code = main(["hold", *SIM_BUDGET,
-                 "--host", franka_sim_no_friction, "--seconds", "30", "--torque-source",
-                 "tau_J+g", "--step-m", "0,0,-0.05", "--step-at-s", "10", "--out", str(out)])
-    assert code == 0
-    import json
-
-    run = json.loads((out / "run.json").read_text())["report"]
+    python = simulator_python("IMPACT_FRANKA_SIM_PYTHON")
+    for attempt in (1, 2):
+        out = tmp_path / f"run{attempt}"
+        with serving([python, str(HERE / "franka_sim_server.py"), "--no-joint-friction"]) as host:
+            code = _hold_step_sigint(host, out, monkeypatch)
+        run = json.loads((out / "run.json").read_text())["report"]
+        if code == 0 or attempt == 2 or run["robot_errors"] != COMMUNICATION_LOSS:
+            break
+        print(f"attempt 1 stopped by the robot for lost communication on this host: "
+              f"success rate {run['command_success_rate_min']:.2f}; running once more")
+    assert code == 0, run["robot_errors"]
     assert run["stop_reason"] == "signal" and run["robot_errors"] == ""
     assert_no_abort_by_the_robot_s_rule(run)
     ticks = pd.read_csv(out / "ticks.csv")
