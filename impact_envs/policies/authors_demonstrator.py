@@ -18,10 +18,18 @@ What makes it theirs, and unlike ``PickPlaceExpert`` (which ramps *absolute* tar
   basket (0.03 m, 5 s); descent to the basket's origin + 0.10 m (0.03 m, 5 s); open (0.5 s);
   up.
 
-Two departures, both for our finger model and rate: the grasp point and yaw are our
-expert's (``scripted_hammer_basket``: theirs loses about one grasp in four with our fingers,
-docs/hammer_basket.md), and it acts at the policy's 30 Hz, with their 0.04 m per step (they
-publish at 50 Hz). Both are written down in docs/hammer_basket.md.
+Two choices, both measured (docs/hammer_basket.md, "Their demonstrator as an expert"):
+
+- **The grasp** (``grasp``): ``"theirs"`` keeps the home orientation and closes around the body
+  origin; ``"ours"`` closes square to the handle around its centreline
+  (``scripted_hammer_basket``). Theirs loses about one grasp in four with our fingers; the
+  success filter drops those demos.
+- **The rate** (``RATE_MAPPINGS``): they publish at 50 Hz, we act at 30 Hz. ``"lead"`` keeps
+  their 0.04 m per step: the target's lead over the measured TCP, i.e. the force the
+  impedance pulls with, is theirs, and so are the deltas their 30 Hz recording stores.
+  ``"speed"`` scales the step to 0.04 m x 50/30 per step, their nominal speed of the target.
+
+``authors_demonstrator`` is what ``impact-collect --expert authors`` builds.
 """
 
 from __future__ import annotations
@@ -30,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from impact_control.errors import InvalidArgumentError, check_choice
 from impact_control.lie import matrix_from_rot6d, rot6d_from_matrix
 from impact_control.rates import POLICY_HZ
 from impact_envs.policies.experts import check_expert_obs
@@ -40,6 +49,15 @@ APPROACH, DESCEND, GRASP, LIFT, HOLD, TRANSIT, LOWER, RELEASE, UP = range(9)
 
 OFFSET_PHASES = (LIFT, HOLD, TRANSIT, LOWER)
 """Phases whose targets carry the height offset."""
+
+THEIR_PUBLISH_HZ = 50.0
+"""Their demonstrator's publishing rate (``step_rate``) [Hz]."""
+
+RATE_MAPPINGS = ("lead", "speed")
+"""How their 50 Hz step maps to our 30 Hz policy step (module docstring)."""
+
+GRASPS = ("ours", "theirs")
+"""Grasp geometries (module docstring)."""
 
 
 @dataclass(frozen=True)
@@ -68,6 +86,14 @@ class RebasedSpec:
     stiffness_z_n_per_m: float = 400.0
 
 
+def rebased_spec(rate_mapping: str = "lead") -> RebasedSpec:
+    """Their values with the step mapped to our policy rate by ``rate_mapping``."""
+    check_choice("rate_mapping", rate_mapping, RATE_MAPPINGS)
+    if rate_mapping == "lead":
+        return RebasedSpec()
+    return RebasedSpec(max_step_m=RebasedSpec().max_step_m * THEIR_PUBLISH_HZ / POLICY_HZ)
+
+
 class RebasedDemonstrator:
     """Batched HammerBasket demonstrator with their re-based targets (module docstring);
     the Policy protocol (``reset``, ``act``)."""
@@ -75,12 +101,15 @@ class RebasedDemonstrator:
     required_observations = ("ee_pos", "ee_rot6d", "object_pos", "object_rot6d", "goal_pos")
 
     def __init__(self, offset_mass_kg: float | None = None,
-                 spec: RebasedSpec | None = None) -> None:
+                 spec: RebasedSpec | None = None, grasp: str = "ours") -> None:
         from impact_envs.policies.scripted_hammer_basket import hammer_basket_expert
 
+        check_choice("grasp", grasp, GRASPS)
         self.spec = spec or RebasedSpec()
         self.offset_mass_kg = offset_mass_kg
-        self.geometry = hammer_basket_expert().spec  # our grasp point, height and yaw
+        self.grasp_name = grasp
+        their_grasp = {"grasp_yaw_obj_rad": 0.0, "grasp_y_obj_m": 0.0} if grasp == "theirs" else {}
+        self.geometry = hammer_basket_expert(**their_grasp).spec  # grasp point, height, yaw
         self.reset(1, np.zeros(1))
 
     def reset(self, n_envs: int, object_mass_kg: np.ndarray | None = None) -> None:
@@ -152,3 +181,20 @@ class RebasedDemonstrator:
             self.phase[i], self.steps[i] = phase + 1, 0
         grip = CLOSED if GRASP <= phase <= LOWER else OPEN
         return np.concatenate([target, rot6d_from_matrix(self.rot[i]), [grip]])
+
+
+EXPERT_DEFAULTS = {"grasp": "theirs", "rate_mapping": "lead"}
+"""What ``impact-collect --expert authors`` uses (chosen by measurement, docs/hammer_basket.md)."""
+
+
+def authors_demonstrator(compensation: str = "privileged") -> RebasedDemonstrator:
+    """Their demonstrator as a scripted expert (``make_expert(..., expert="authors")``):
+    ``compensation`` ``"privileged"`` adds their ``m g / K`` offset from the true mass,
+    ``"none"`` no offset (an ablation); ``EXPERT_DEFAULTS`` fix the grasp and the rate."""
+    if compensation not in ("privileged", "none"):
+        raise InvalidArgumentError(
+            f"the authors' demonstrator has no compensation {compensation!r}; valid: "
+            "privileged (their m g / K offset), none")
+    return RebasedDemonstrator(offset_mass_kg=None if compensation == "privileged" else 0.0,
+                               spec=rebased_spec(EXPERT_DEFAULTS["rate_mapping"]),
+                               grasp=EXPERT_DEFAULTS["grasp"])

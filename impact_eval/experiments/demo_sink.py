@@ -41,9 +41,14 @@ from impact_control.errors import ImpactError
 from impact_eval.envs import check_masses
 
 ENV_ID = "IMPACT/HammerBasket-v1"
-DEMOS = ("rebased", "absolute")
+DEMOS = ("rebased", "absolute", "rebased_speed", "rebased_their_grasp")
+"""``rebased``: their demonstrator at their 0.04 m lead per step with our grasp;
+``rebased_speed``: its step scaled to their 50 Hz speed; ``rebased_their_grasp``: their grasp
+(``authors_demonstrator.RATE_MAPPINGS``, ``GRASPS``)."""
+PRIVILEGED = "privileged"
+"""``--offset-kg privileged``: each episode's offset is its own mass (their demos)."""
 COLUMNS = ("demo", "offset_kg", "mass_kg", "seed", "episode", "success", "hit", "clearance_m",
-           "crossing_tcp_m")
+           "crossing_tcp_m", "first_success_step")
 
 
 def _aabb_z(model, data, geoms: np.ndarray) -> tuple[float, float]:
@@ -65,16 +70,18 @@ def _touching(data, first: np.ndarray, second: np.ndarray) -> bool:
     return bool(np.any((a & b) | (c & e)))
 
 
-def _policy(demo: str, offset_kg: float):
-    from impact_envs.policies.authors_demonstrator import RebasedDemonstrator
+def _policy(demo: str):
+    """The demonstrator; its offset mass is given to ``reset``."""
+    from impact_envs.policies.authors_demonstrator import RebasedDemonstrator, rebased_spec
     from impact_envs.policies.scripted_hammer_basket import hammer_basket_expert
 
-    if demo == "rebased":
-        return RebasedDemonstrator(offset_mass_kg=offset_kg)
-    return hammer_basket_expert("privileged")
+    if demo == "absolute":
+        return hammer_basket_expert("privileged")
+    return RebasedDemonstrator(spec=rebased_spec("speed" if demo == "rebased_speed" else "lead"),
+                               grasp="theirs" if demo == "rebased_their_grasp" else "ours")
 
 
-def run_cell(args: tuple[str, float, float, int, int, int]) -> list[dict[str, object]]:
+def run_cell(args: tuple[str, float | str, float, int, int, int]) -> list[dict[str, object]]:
     """The rows of one (demo, offset, mass) cell's episodes."""
     import gymnasium as gym
 
@@ -88,14 +95,17 @@ def run_cell(args: tuple[str, float, float, int, int, int]) -> list[dict[str, ob
     m, d = sim.model, sim.data
     hammer = np.flatnonzero(m.geom_bodyid == m.body("hammer").id)
     basket = np.flatnonzero(m.geom_bodyid == m.body("basket").id)
-    policy, rows = _policy(demo, offset_kg), []
+    policy, rows = _policy(demo), []
+    offset_mass = mass if offset_kg == PRIVILEGED else float(offset_kg)
     for e in range(episodes):
         obs, _ = env.reset(seed=seed + 1000 * k + e, options={"object_mass": mass})
-        policy.reset(1, np.array([offset_kg]))
-        clearance, hit, tcp_min, info = math.inf, False, math.inf, {}
-        for _ in range(900):
+        policy.reset(1, np.array([offset_mass]))
+        clearance, hit, tcp_min, info, first = math.inf, False, math.inf, {}, -1
+        for step in range(900):
             action = np.asarray(policy.act(stack_obs([obs]))[0])
             obs, _, _, _, info = env.step(action)
+            if first < 0 and info.get("is_success", False):
+                first = step
             closed = action[-1] > 0.0
             lifted = float(obs["object_pos"][2]) > TABLE_TOP_M + 0.05
             if not (closed and lifted):
@@ -111,16 +121,29 @@ def run_cell(args: tuple[str, float, float, int, int, int]) -> list[dict[str, ob
                      "seed": seed + 1000 * k + e, "episode": e,
                      "success": int(bool(info.get("is_success", False))), "hit": int(hit),
                      "clearance_m": clearance if math.isfinite(clearance) else math.nan,
-                     "crossing_tcp_m": tcp_min if math.isfinite(tcp_min) else math.nan})
+                     "crossing_tcp_m": tcp_min if math.isfinite(tcp_min) else math.nan,
+                     "first_success_step": first})
     env.close()
     return rows
+
+
+def _offset(text: str) -> float | str | None:
+    """``--offset-kg``'s value, or None if invalid."""
+    if text == PRIVILEGED:
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    return value if 0.0 < value < math.inf else None
 
 
 def main(argv: list[str] | None = None) -> None:
     """Entry point; bad input exits 2 with one line, before anything is written."""
     p = OneLineParser(description=__doc__.splitlines()[0])
     p.add_argument("--masses", default="0.75,1.25,1.75", help="comma list [kg]")
-    p.add_argument("--offset-kg", type=float, default=0.6)
+    p.add_argument("--offset-kg", default="0.6",
+                   help="the offset's mass [kg], or 'privileged': each episode's own mass")
     p.add_argument("--demos", default=",".join(DEMOS))
     p.add_argument("--episodes", type=int, default=20)
     p.add_argument("--seed", type=int, default=0)
@@ -136,15 +159,16 @@ def main(argv: list[str] | None = None) -> None:
         p.fail(f"invalid --masses {args.masses!r}; valid: a comma list of masses in kg")
     if args.episodes < 1 or args.workers < 1 or not masses:
         p.fail("--episodes and --workers must be >= 1 and --masses name at least one mass")
-    if not (0.0 < args.offset_kg < math.inf):
-        p.fail(f"invalid --offset-kg {args.offset_kg}; valid: a mass > 0 [kg]")
+    offset = _offset(args.offset_kg)
+    if offset is None:
+        p.fail(f"invalid --offset-kg {args.offset_kg!r}; valid: a mass > 0 [kg] or {PRIVILEGED}")
     if args.out.exists():
         p.fail(f"--out {str(args.out)!r} exists; valid: a new file (nothing is overwritten)")
     try:
         check_masses(ENV_ID, masses)
     except ImpactError as exc:
         p.fail(" ".join(str(exc).split()))
-    cells = [(demo, args.offset_kg, mass, args.seed, k, args.episodes)
+    cells = [(demo, offset, mass, args.seed, k, args.episodes)
              for demo in demos for k, mass in enumerate(masses)]
     args.out.parent.mkdir(parents=True, exist_ok=True)
     with args.out.open("x", newline="") as f, ProcessPoolExecutor(args.workers) as pool:
