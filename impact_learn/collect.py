@@ -79,7 +79,7 @@ def default_expert_factory(cfg: CollectConfig) -> Callable[[], Expert]:
     def make() -> Expert:
         from impact_envs.policies.experts import make_expert
 
-        return make_expert(cfg.env_id, compensation=cfg.compensation)
+        return make_expert(cfg.env_id, compensation=cfg.compensation, expert=cfg.expert)
 
     return make
 
@@ -92,7 +92,7 @@ def store_attrs(cfg: CollectConfig, param_name: str) -> dict:
         "param_spec": cfg.param_spec(),
         "controller": cfg.controller,
         "controller_preset": cfg.controller_preset,
-        "expert": {"name": "scripted", "compensation": cfg.compensation},
+        "expert": {"name": cfg.expert, "compensation": cfg.compensation},
         "seed": cfg.seed,
         "post_success_steps": cfg.post_success_steps,
         "package_version": impact_envs.__version__,
@@ -192,6 +192,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--compensation", default="none",
         help="how the expert meets a load's sag: none | closed_loop | privileged (ablation)")
+    parser.add_argument(
+        "--expert", default="scripted",
+        help="scripted (the task's expert) | authors (HammerBasket: the paper authors' "
+             "demonstrator, re-based targets; with --compensation privileged their offset)")
     parser.add_argument("--controller", default="impedance", help="impedance | impact")
     parser.add_argument("--controller-preset", default="default",
                         help="the controller's named configuration, e.g. authors_sim (with "
@@ -249,6 +253,7 @@ def config_from_args(args: argparse.Namespace) -> CollectConfig:
         param_range=param_range,
         param_list=param_list,
         compensation=args.compensation,
+        expert=args.expert,
         controller=args.controller,
         controller_preset=args.controller_preset,
         seed=args.seed,

@@ -10,6 +10,7 @@ from impact_control.errors import InvalidArgumentError, check_choice
 from impact_control.presets import PRESETS
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.parallel import check_executor
+from impact_envs.policies.experts import EXPERTS
 from impact_envs.versions import check_not_retired
 
 COMPENSATIONS = ("none", "closed_loop", "privileged")
@@ -33,6 +34,9 @@ class CollectConfig:
         compensation: How the expert meets a load's sag: ``none``, ``closed_loop`` (a
             teleoperator's integral on the observed height error) or ``privileged`` (m g / K
             from the mass; an ablation). ``policies/scripted.py``.
+        expert: ``scripted`` (the task's expert) or ``authors`` (HammerBasket: the paper
+            authors' demonstrator, ``policies/authors_demonstrator.py``; compensation
+            ``privileged`` is their offset).
         controller: Low-level controller of the env: ``impedance`` or ``impact``.
         controller_preset: The controller's named configuration (``presets.PRESETS``):
             ``default``, or e.g. ``authors_sim``, whose impedance, limits and target filter
@@ -59,6 +63,7 @@ class CollectConfig:
     param_range: tuple[float, float] | None = None
     param_list: tuple[float, ...] | None = None
     compensation: str = "none"
+    expert: str = "scripted"
     controller: str = "impedance"
     controller_preset: str = "default"
     seed: int = 0
@@ -76,6 +81,7 @@ class CollectConfig:
         check_choice("controller", self.controller, CONTROLLERS)
         check_choice("controller preset", self.controller_preset, PRESETS)
         check_choice("compensation", self.compensation, COMPENSATIONS)
+        check_choice("expert", self.expert, EXPERTS)
         check_executor(self.executor, self.ray_address)
         if not isinstance(self.observation, ObservationOptions):
             raise InvalidArgumentError(

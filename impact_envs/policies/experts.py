@@ -27,11 +27,28 @@ _BUILTIN = {
     "hammer_basket": "impact_envs.policies.scripted_hammer_basket:hammer_basket_expert",
 }
 _REGISTERED: dict[str, ExpertFactory] = {}
+_OTHERS = {
+    ("hammer_basket", "authors"):
+        "impact_envs.policies.authors_demonstrator:authors_demonstrator",
+}
+"""Experts other than a task's scripted one: (task name, expert name) -> factory."""
+EXPERTS = ("scripted", "authors")
+"""Expert names (``make_expert``'s ``expert``): the task's own, or its authors' demonstrator."""
 
 
 def register_expert(task_name: str, factory: ExpertFactory) -> None:
     """Make ``make_expert`` build ``factory(compensation)`` for the task called ``task_name``."""
     _REGISTERED[task_name] = factory
+
+
+def _other(task_name: str, expert: str) -> ExpertFactory:
+    """The factory of a task's non-scripted ``expert``; one line naming the valid ones."""
+    if (task_name, expert) not in _OTHERS:
+        valid = ["scripted"] + [e for t, e in _OTHERS if t == task_name]
+        raise InvalidArgumentError(
+            f"no expert {expert!r} for task {task_name!r}; valid: {', '.join(valid)}")
+    module, name = _OTHERS[task_name, expert].split(":")
+    return getattr(import_module(module), name)
 
 
 def _factory(task_name: str) -> ExpertFactory | None:
@@ -43,14 +60,17 @@ def _factory(task_name: str) -> ExpertFactory | None:
     return None
 
 
-def make_expert(task: str, compensation: str = "none") -> Policy:
+def make_expert(task: str, compensation: str = "none", expert: str = "scripted") -> Policy:
     """The scripted expert of a task, by task name (``"hammer"``) or env id
-    (``"IMPACT/Hammer-v1"``); ``compensation``: how it meets a load's sag.
+    (``"IMPACT/Hammer-v1"``); ``compensation``: how it meets a load's sag; ``expert``:
+    ``"scripted"`` (the task's own) or ``"authors"`` (the paper authors' demonstrator, where
+    the task has one: HammerBasket).
 
     Raises:
         InvalidArgumentError: Unknown task or env id (a retired one: the line naming its
             current id, ``versions.retired``), no expert for it, or a compensation
-            the expert does not offer (each a one-line error naming the valid choices).
+            the expert does not offer, or an expert the task lacks (each a one-line error
+            naming the valid choices).
     """
     from impact_envs.tasks.registry import TASKS  # filled by ``import impact_envs``
 
@@ -60,6 +80,8 @@ def make_expert(task: str, compensation: str = "none") -> Policy:
             f"no scripted expert for {task!r}: not a registered IMPACT task; valid: "
             f"{', '.join(TASKS)}, or a task name")
     name = TASKS[task].name if "/" in task else task
+    if expert != "scripted":
+        return _other(name, expert)(compensation)
     factory = _factory(name)
     if factory is None:
         valid = sorted({*_BUILTIN, *_REGISTERED})

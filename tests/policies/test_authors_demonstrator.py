@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from impact_control.errors import InvalidArgumentError
 from impact_control.lie import rot6d_from_matrix
 from impact_envs.policies.authors_demonstrator import APPROACH, LIFT, RebasedDemonstrator
 
@@ -43,3 +44,59 @@ def test_the_lift_adds_the_offset_of_its_mass_to_the_re_based_step(offset_kg, ma
     expected = ee + 0.04 * (w - ee) / np.linalg.norm(w - ee) + [0.0, 0.0, offset]
     np.testing.assert_allclose(action[:3], expected, atol=1e-6)
     assert action[-1] > 0  # closed
+
+
+def test_the_speed_mapping_scales_their_50_hz_step_to_our_rate() -> None:
+    from impact_envs.policies.authors_demonstrator import rebased_spec
+
+    assert rebased_spec("lead").max_step_m == 0.04
+    assert rebased_spec("speed").max_step_m == pytest.approx(0.04 * 50.0 / 30.0)
+    with pytest.raises(InvalidArgumentError, match="valid choices: lead, speed"):
+        rebased_spec("fast")
+
+
+def test_their_grasp_keeps_the_home_orientation_around_the_body_origin() -> None:
+    """Theirs: yaw 0 in the hammer frame, the body origin's y; ours: square to the handle
+    around its centreline (scripted_hammer_basket)."""
+    theirs, ours = RebasedDemonstrator(grasp="theirs"), RebasedDemonstrator(grasp="ours")
+    for demo in (theirs, ours):
+        demo.reset(1)
+        demo.act(_obs(np.array([0.3, 0.0, 0.6])))
+    assert theirs.geometry.grasp_yaw_obj_rad == 0.0
+    assert not np.allclose(theirs.rot[0], ours.rot[0])  # 6.9 deg apart
+    assert ours.geometry.grasp_yaw_obj_rad != 0.0
+    assert abs(theirs.grasp[0][1] - ours.grasp[0][1]) > 0.005  # the handle's centreline
+    with pytest.raises(InvalidArgumentError, match="valid choices: ours, theirs"):
+        RebasedDemonstrator(grasp="side")
+
+
+def test_make_expert_builds_it_for_hammer_basket_only() -> None:
+    from impact_envs.policies.authors_demonstrator import EXPERT_DEFAULTS
+    from impact_envs.policies.experts import make_expert
+
+    demo = make_expert("IMPACT/HammerBasket-v1", "privileged", expert="authors")
+    assert isinstance(demo, RebasedDemonstrator) and demo.offset_mass_kg is None
+    assert demo.grasp_name == EXPERT_DEFAULTS["grasp"]
+    assert make_expert("hammer_basket", "none", expert="authors").offset_mass_kg == 0.0
+    with pytest.raises(InvalidArgumentError, match="valid: privileged .*, none"):
+        make_expert("IMPACT/HammerBasket-v1", "closed_loop", expert="authors")
+    with pytest.raises(InvalidArgumentError, match="no expert 'authors' for task 'hammer'; "
+                                                    "valid: scripted$"):
+        make_expert("IMPACT/Hammer-v1", expert="authors")
+
+
+def test_impact_collect_expert_authors_reaches_the_store_and_refuses_other_tasks(
+        tmp_path, capsys) -> None:
+    from impact_learn.collect import build_parser, config_from_args, main, store_attrs
+
+    args = build_parser().parse_args(["--env", "IMPACT/HammerBasket-v1", "--out",
+                                      str(tmp_path / "d.zarr"), "--expert", "authors",
+                                      "--compensation", "privileged"])
+    attrs = store_attrs(config_from_args(args), "object_mass")
+    assert attrs["expert"] == {"name": "authors", "compensation": "privileged"}
+    with pytest.raises(SystemExit) as exit_:
+        main(["--env", "IMPACT/Hammer-v1", "--out", str(tmp_path / "e.zarr"),
+              "--expert", "authors", "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and "\n" not in err and "valid: scripted" in err
+    assert not (tmp_path / "e.zarr").exists()
