@@ -13,6 +13,8 @@ name gives the same rows as its shortcut, but for the ``method`` column.
 | `scripted_closed_loop` | `scripted.closed_loop+impedance`         |
 | `vanilla_dp`      | `dp.vanilla+impedance`                        |
 | `augmented_dp`    | `dp.augmented+impedance`                      |
+| `vanilla_dp_authors` | `dp.vanilla_authors+impedance@authors_sim` (2) |
+| `augmented_dp_authors` | `dp.augmented_authors+impedance@authors_sim` (2) |
 | `impact`          | `dp.nominal+impact` (`<env>/impact`, else `<env>/vanilla`) |
 | `impact_vanilla`  | `dp.vanilla+impact`                           |
 | `impact_paper`    | `dp.vanilla+impact@paper`                     |
@@ -32,6 +34,10 @@ name gives the same rows as its shortcut, but for the ``method`` column.
 the joint torque (``commanded``: ``RobotOptions(torque_reading="commanded")``), and the
 controller state carried across the episodes of a cell (``carry``: ``MethodSpec.carry``,
 ``chain.py``).
+(2) Their baselines as they made them (HammerBasket, issue 55): DPs trained on their
+demonstrator's demos (``impact-collect --expert authors``) with their action convention (xyz
+deltas from the measured TCP), on their baselines' controller (impedance, preset
+``authors_sim``).
 
 Syntax: ``+`` and ``@`` appear in no shortcut, a ``sb3:`` prefix is tested first (its path
 keeps any ``+`` or ``@``), and no ``,`` or ``:`` is used, so ``--method a,b`` and
@@ -240,6 +246,12 @@ SHORTCUTS = (
      "impedance control"),
     ("vanilla_dp", "dp.vanilla+impedance", "Vanilla DP, impedance"),
     ("augmented_dp", "dp.augmented+impedance", "Augmented DP, impedance"),
+    ("vanilla_dp_authors", "dp.vanilla_authors+impedance@authors_sim",
+     "Vanilla DP on the authors' demonstrator's demos and action convention, on their "
+     "baselines' impedance (HammerBasket)"),
+    ("augmented_dp_authors", "dp.augmented_authors+impedance@authors_sim",
+     "Augmented DP (0.1-10 kg) on the authors' demonstrator's demos and action convention, "
+     "on their baselines' impedance (HammerBasket)"),
     ("impact", "dp.nominal+impact",
      "nominal-mass DP (impact checkpoint, else vanilla) + IMPACT controller"),
     ("impact_vanilla", "dp.vanilla+impact",
