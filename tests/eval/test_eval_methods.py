@@ -151,7 +151,9 @@ SHIPPED = sorted((p.parent.name, p.name) for p in
 
 
 VARIANT_METHOD = {"vanilla": "vanilla_dp", "augmented": "augmented_dp", "impact": "impact",
-                  "vanilla_rgb": "vanilla_dp_rgb", "lerobot_dp": "lerobot_dp"}
+                  "vanilla_rgb": "vanilla_dp_rgb", "lerobot_dp": "lerobot_dp",
+                  "vanilla_authors": "vanilla_dp_authors",
+                  "augmented_authors": "augmented_dp_authors"}
 """The method that loads each checkpoint variant (``lerobot_dp`` needs LeRobot: checked in its
 venv, tests/lerobot_plugin/test_plugin_policy.py without it)."""
 
