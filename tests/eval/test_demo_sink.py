@@ -9,8 +9,10 @@ import pytest
 @pytest.mark.parametrize(("argv", "message"), [
     (["--masses", "0.75,abc"], "invalid --masses '0.75,abc'"),
     (["--masses", "50"], "object_mass=50.0 out of range; valid: 0.05 to 12.0 kg"),
-    (["--demos", "theirs"], "valid: a comma list of rebased, absolute"),
-    (["--offset-kg", "0"], "invalid --offset-kg 0.0"),
+    (["--demos", "theirs"], "valid: a comma list of rebased, absolute, rebased_speed, "
+                            "rebased_their_grasp"),
+    (["--offset-kg", "0"], "invalid --offset-kg '0'; valid: a mass > 0 [kg] or privileged"),
+    (["--offset-kg", "heavy"], "invalid --offset-kg 'heavy'"),
     (["--episodes", "0"], "--episodes and --workers must be >= 1"),
 ])
 def test_demo_sink_refuses_bad_input_in_one_line(tmp_path, capsys, argv, message) -> None:
@@ -46,3 +48,16 @@ def test_contact_params_reads_the_pairs_and_refuses_an_env_without_a_hammer(caps
         main(["--env", "IMPACT/Dumbbell-v1"])
     err = capsys.readouterr().err.strip()
     assert exit_.value.code == 2 and "\n" not in err and "no body named hammer" in err
+
+
+def test_demo_sink_builds_each_demonstrator_variant() -> None:
+    """``rebased_speed`` steps 4 cm x 50/30, ``rebased_their_grasp`` grasps as theirs,
+    ``privileged`` gives each episode its own mass as the offset."""
+    from impact_envs.policies.authors_demonstrator import RebasedDemonstrator
+    from impact_eval.experiments.demo_sink import PRIVILEGED, _offset, _policy
+
+    speed, theirs = _policy("rebased_speed"), _policy("rebased_their_grasp")
+    assert isinstance(speed, RebasedDemonstrator) and speed.spec.max_step_m == pytest.approx(
+        0.04 * 50 / 30)
+    assert theirs.grasp_name == "theirs" and _policy("rebased").grasp_name == "ours"
+    assert _offset(PRIVILEGED) == PRIVILEGED and _offset("0.6") == 0.6 and _offset("-1") is None
