@@ -33,8 +33,6 @@ LIFTED_M = 0.05
 
 def run_pair(args: tuple[str, float, int, int]) -> list[dict[str, object]]:
     """Both contacts' rows of one episode (method, mass, seed, episode index)."""
-    import gymnasium as gym  # noqa: F401
-
     import impact_envs  # noqa: F401 - registers the envs
     from impact_control.policy import stack_obs
     from impact_envs.scenes_contact import use_their_finger_contact
