@@ -81,48 +81,74 @@ def _policy(demo: str):
                                grasp="theirs" if demo == "rebased_their_grasp" else "ours")
 
 
+class CarryProbe:
+    """Per step of one episode, what the hammer does while the hand is closed and the hammer
+    lifted (module docstring): its clearance over the wall while crossing it, the TCP's
+    lowest height there, a touch of the basket, the first success step, and the hammer
+    origin's highest point above the table while closed (``max_lift_m``)."""
+
+    def __init__(self, env) -> None:
+        from impact_envs.tasks.hammer_basket import TABLE_TOP_M
+
+        self.m, self.d = env.unwrapped.sim.model, env.unwrapped.sim.data
+        self.body = self.m.body("hammer").id
+        self.hammer = np.flatnonzero(self.m.geom_bodyid == self.body)
+        self.basket = np.flatnonzero(self.m.geom_bodyid == self.m.body("basket").id)
+        self.table = TABLE_TOP_M
+        self.clearance, self.tcp_min, self.max_lift = math.inf, math.inf, -math.inf
+        self.hit, self.first, self.step, self.info = False, -1, 0, {}
+
+    def update(self, obs: dict, action: np.ndarray, info: dict) -> None:
+        from impact_envs.tasks.hammer_basket import SUCCESS_HALF_M
+
+        m, d = self.m, self.d
+        if self.first < 0 and info.get("is_success", False):
+            self.first = self.step
+        self.step, self.info = self.step + 1, info
+        closed = action[-1] > 0.0
+        height = float(obs["object_pos"][2]) - self.table
+        if closed:
+            self.max_lift = max(self.max_lift, height)
+        if not (closed and height > 0.05):
+            return
+        rel = np.abs(d.xpos[self.body, :2] - obs["goal_pos"][:2])
+        if np.all(rel <= SUCCESS_HALF_M + 0.1) and np.any(rel >= SUCCESS_HALF_M - 0.05):
+            self.tcp_min = min(self.tcp_min, float(obs["ee_pos"][2]) - self.table)
+            wall_top = _aabb_z(m, d, self.basket)[1]
+            self.clearance = min(self.clearance, _aabb_z(m, d, self.hammer)[0] - wall_top)
+        self.hit = self.hit or _touching(d, self.hammer, self.basket)
+
+    def row(self) -> dict[str, object]:
+        """The episode's columns (NaN where nothing was measured)."""
+        def finite(x: float) -> float:
+            return x if math.isfinite(x) else math.nan
+
+        return {"success": int(bool(self.info.get("is_success", False))), "hit": int(self.hit),
+                "clearance_m": finite(self.clearance), "crossing_tcp_m": finite(self.tcp_min),
+                "first_success_step": self.first}
+
+
 def run_cell(args: tuple[str, float | str, float, int, int, int]) -> list[dict[str, object]]:
     """The rows of one (demo, offset, mass) cell's episodes."""
     import gymnasium as gym
 
     import impact_envs  # noqa: F401 - registers the envs
     from impact_control.policy import stack_obs
-    from impact_envs.tasks.hammer_basket import SUCCESS_HALF_M, TABLE_TOP_M
 
     demo, offset_kg, mass, seed, k, episodes = args
     env = gym.make(ENV_ID, controller="impedance", controller_preset="authors_sim")
-    sim = env.unwrapped.sim
-    m, d = sim.model, sim.data
-    hammer = np.flatnonzero(m.geom_bodyid == m.body("hammer").id)
-    basket = np.flatnonzero(m.geom_bodyid == m.body("basket").id)
     policy, rows = _policy(demo), []
     offset_mass = mass if offset_kg == PRIVILEGED else float(offset_kg)
     for e in range(episodes):
         obs, _ = env.reset(seed=seed + 1000 * k + e, options={"object_mass": mass})
         policy.reset(1, np.array([offset_mass]))
-        clearance, hit, tcp_min, info, first = math.inf, False, math.inf, {}, -1
-        for step in range(900):
+        probe = CarryProbe(env)
+        for _ in range(900):
             action = np.asarray(policy.act(stack_obs([obs]))[0])
             obs, _, _, _, info = env.step(action)
-            if first < 0 and info.get("is_success", False):
-                first = step
-            closed = action[-1] > 0.0
-            lifted = float(obs["object_pos"][2]) > TABLE_TOP_M + 0.05
-            if not (closed and lifted):
-                continue
-            rel = np.abs(d.xpos[m.body("hammer").id, :2] - obs["goal_pos"][:2])
-            crossing = np.all(rel <= SUCCESS_HALF_M + 0.1) and np.any(rel >= SUCCESS_HALF_M - 0.05)
-            if crossing:  # over the wall's band, not yet over the basket's middle
-                tcp_min = min(tcp_min, float(obs["ee_pos"][2]) - TABLE_TOP_M)
-                wall_top = _aabb_z(m, d, basket)[1]
-                clearance = min(clearance, _aabb_z(m, d, hammer)[0] - wall_top)
-            hit = hit or _touching(d, hammer, basket)
+            probe.update(obs, action, info)
         rows.append({"demo": demo, "offset_kg": offset_kg, "mass_kg": mass,
-                     "seed": seed + 1000 * k + e, "episode": e,
-                     "success": int(bool(info.get("is_success", False))), "hit": int(hit),
-                     "clearance_m": clearance if math.isfinite(clearance) else math.nan,
-                     "crossing_tcp_m": tcp_min if math.isfinite(tcp_min) else math.nan,
-                     "first_success_step": first})
+                     "seed": seed + 1000 * k + e, "episode": e, **probe.row()})
     env.close()
     return rows
 
