@@ -61,3 +61,28 @@ def test_demo_sink_builds_each_demonstrator_variant() -> None:
         0.04 * 50 / 30)
     assert theirs.grasp_name == "theirs" and _policy("rebased").grasp_name == "ours"
     assert _offset(PRIVILEGED) == PRIVILEGED and _offset("0.6") == 0.6 and _offset("-1") is None
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--table", "nowhere"], "has no episodes.csv"),
+    (["--method", "nope"], "no rows of method 'nope' in bins '1.0'; valid methods: impact"),
+    (["--bins", "x"], "invalid --bins 'x'"),
+])
+def test_policy_sink_refuses_bad_input_in_one_line(tmp_path, capsys, argv, message) -> None:
+    import pandas as pd
+
+    from impact_eval.experiments.policy_sink import main
+
+    table = tmp_path / "t"
+    table.mkdir()
+    pd.DataFrame([{"method": "impact", "env_id": "IMPACT/HammerBasket-v1", "param_value": 1.0,
+                   "seed": 1, "episode": 0, "drawn_mass_kg": 1.5, "success": 0}]).to_csv(
+        table / "episodes.csv", index=False)
+    args = {"--table": str(table), "--method": "impact", "--bins": "1.0"}
+    args.update(dict(zip(argv[::2], argv[1::2], strict=True)))
+    out = tmp_path / "rows.csv"
+    with pytest.raises(SystemExit) as exit_:
+        main([*[x for kv in args.items() for x in kv], "--out", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and "\n" not in err and message in err
+    assert not out.exists()
