@@ -67,15 +67,15 @@ def run_pair(args: tuple[str, float, int, int]) -> list[dict[str, object]]:
 
 
 def _bin(text: str) -> tuple[float, float]:
-    lo, _, hi = text.partition("-")
-    try:
-        low, high = float(lo), float(hi)
-    except ValueError:
-        raise InvalidArgumentError(f"invalid --mass-bin {text!r}; valid: LO-HI in kg") from None
-    if not 0.0 < low < high:
-        raise InvalidArgumentError(f"invalid --mass-bin {text!r}; valid: LO-HI with 0 < LO < HI")
-    check_masses(ENV_ID, [low, high])
-    return low, high
+    """The one bin ``text`` names (``impact_eval.bins.parse_bins``'s syntax), in the task's
+    mass range."""
+    from impact_eval.bins import parse_bins
+
+    bins = parse_bins(text)
+    if len(bins) != 1:
+        raise InvalidArgumentError(f"invalid --mass-bin {text!r}; valid: one LO-HI bin in kg")
+    check_masses(ENV_ID, [bins[0].lo, bins[0].hi])
+    return bins[0].lo, bins[0].hi
 
 
 def main(argv: list[str] | None = None) -> None:

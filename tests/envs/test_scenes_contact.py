@@ -42,8 +42,10 @@ def test_a_scene_without_finger_hammer_pairs_is_refused_in_one_line(env_id: str)
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["--mass-bin", "8"], "invalid --mass-bin '8'; valid: LO-HI"),
-    (["--mass-bin", "9-8"], "0 < LO < HI"),
+    (["--mass-bin", "8"], "malformed --mass-bins '8': '8' is not LO-HI"),
+    (["--mass-bin", "9-8"], "reversed or empty (LO < HI)"),
+    (["--mass-bin", "1-2,2-3"], "valid: one LO-HI bin in kg"),
+    (["--mass-bin", "8-50"], "out of range"),
     (["--method", "impact_authors"], "carries state across episodes"),
     (["--method", "nope"], "nope"),
 ])
