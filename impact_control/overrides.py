@@ -1,7 +1,7 @@
 """Command-line overrides of a ``ControllerConfig``: ``SECTION.FIELD=VALUE``.
 
 For ablations from the command line (``impact-eval --controller-set``,
-``impact_eval.experiments.trace``)::
+``impact_experiments.trace``)::
 
     internal_model.slow_rate_max=1.5
     slow_wrench.rate_force_per_s=20

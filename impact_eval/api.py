@@ -23,7 +23,7 @@ from impact_control.policy import Policy
 from impact_control.presets import PRESETS
 from impact_envs.envs.arguments import coerce_options
 from impact_envs.envs.options import ObservationOptions
-from impact_eval.bins import edge_text
+from impact_envs.tasks.bins import edge_text
 from impact_eval.grid import format_value
 from impact_eval.methods import MethodSpec, temporary_method
 from impact_eval.spec import RunOptions, SweepSpec, values_from_text

@@ -12,9 +12,10 @@ import math
 import numpy as np
 
 from impact_control.errors import InvalidArgumentError
+from impact_envs.tasks.values import GRID_DECIMALS, plain_number
 
-GRID_DECIMALS = 10
-"""Grid values are rounded to this many decimals so ``0.1 + 3*0.5`` prints as ``1.6``."""
+__all__ = ["GRID_DECIMALS", "MAX_GRID_POINTS", "episode_seed", "format_value", "parse_grid",
+           "plain_number"]
 
 MAX_GRID_POINTS = 10_000
 """Most values a grid may expand to (guards against typos such as a step of ``1e-9``)."""
@@ -82,14 +83,6 @@ def parse_grid(spec: str) -> list[float]:
         raise InvalidArgumentError(f"malformed grid {spec!r}: duplicate values")
     return values
 
-
-def plain_number(value: float) -> str:
-    """``value`` as a user types it, for messages and argument text: its ``repr``, or fixed
-    point where that has an exponent (``0.00001``, not ``1e-05``)."""
-    text = repr(float(value))
-    if "e" not in text:
-        return text
-    return f"{value:.{GRID_DECIMALS}f}".rstrip("0").rstrip(".")
 
 
 def format_value(value: float) -> str:

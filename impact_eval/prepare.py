@@ -13,8 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from impact_control.errors import ImpactError, InvalidArgumentError
+from impact_envs.tasks.bins import bin_param_name, check_bin_param, draw_in_bin
 from impact_eval import csvio, runinfo
-from impact_eval.bins import bin_param_name, check_bin_param, draw_in_bin
 from impact_eval.checkpoints import fingerprint, policy_checkpoint
 from impact_eval.code_check import check_same_code
 from impact_eval.envs import (

@@ -84,7 +84,7 @@ class LockstepBatch:
         self.with_press_diagnostics = False
         """Add ``safety.FF_PRESS_COLUMNS`` and ``NET_CONTACT_COLUMNS`` to each finished
         episode's columns (issue 54's
-        diagnostic, ``experiments.ff_press``; never in ``episodes.csv``)."""
+        diagnostic, ``impact_experiments.ff_press``; never in ``episodes.csv``)."""
 
     def run(
         self,

@@ -20,7 +20,7 @@ from impact_control.errors import InvalidArgumentError
 from impact_control.overrides import apply_overrides
 from impact_envs.envs.options import apply_robot_overrides
 from impact_envs.parallel import check_executor
-from impact_eval.bins import MassBin, check_bins, format_bins, parse_bins
+from impact_envs.tasks.bins import MassBin, check_bins, format_bins, parse_bins
 from impact_eval.grid import format_value, parse_grid
 
 SPEC_FORMAT = 1

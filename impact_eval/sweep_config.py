@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from impact_control.errors import ImpactError
-from impact_eval.bins import bin_param_name, draw_in_bin
+from impact_envs.tasks.bins import bin_param_name, draw_in_bin
 from impact_eval.grid import episode_seed
 from impact_eval.rollout import EpisodeJob
 from impact_eval.spec import RunOptions, SweepSpec

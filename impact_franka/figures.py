@@ -1,6 +1,6 @@
 """The adaptation protocol's figure, drawn from a simulated run (``impact-protocol``) or from a
 hardware run's ``ticks.csv`` (``impact-robot hold``). It lives here, where the robot runner may
-use it without the benchmark; ``impact_eval.experiments.adaptation`` imports it."""
+use it without the benchmark; ``impact_experiments.adaptation`` imports it."""
 
 from __future__ import annotations
 

@@ -16,7 +16,7 @@ import numpy as np
 from gymnasium.envs.registration import register, registry
 
 from impact_control.errors import InvalidArgumentError
-from impact_eval.bins import draw_in_bin
+from impact_envs.tasks.bins import draw_in_bin
 from impact_lerobot.features import ObservationPlan, observation_plan
 from impact_lerobot.settings import GYM_NAMESPACE, TASKS, PluginSettings, mass_param
 

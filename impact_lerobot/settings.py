@@ -17,9 +17,9 @@ from impact_control.errors import InvalidArgumentError, check_choice
 from impact_control.presets import PRESETS
 from impact_envs import ENV_IDS, ObservationOptions
 from impact_envs.tasks.base import Task, TaskParam
+from impact_envs.tasks.bins import mass_param_name
 from impact_envs.tasks.registry import task_class
 from impact_envs.versions import check_not_retired
-from impact_eval.bins import mass_param_name
 
 GYM_NAMESPACE = "gym_impact"
 """LeRobot 0.4.4 makes ``gym_<type>/<task>``: the wrapped envs are registered under it."""

@@ -5,7 +5,7 @@ records), ``SimArrays`` (the simulator's views, ``robot/sim.py``), ``ArmArrays``
 model, ``impact_control/chain_dynamics.py``), ``DynamicsArrays`` and ``ControllerState`` (the
 controller's, ``control/``). ``bundle_tick_args`` gathers them once per policy step into one
 ``TickArgs`` (a numba structref), so each tick's call (``bundled_tick``) crosses one pointer
-instead of unboxing some 60 arrays (measured by ``impact_eval.experiments.crossing_cost``).
+instead of unboxing some 60 arrays (measured by ``impact_experiments.crossing_cost``).
 The physics step (``mj_step``) follows in Python (``closed_loop.py``).
 """
 

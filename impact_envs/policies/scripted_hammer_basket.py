@@ -8,7 +8,7 @@ beside the handle's edge, 6.9 deg off square to it. Ours closes them square to t
 (``grasp_yaw_obj_rad``) around the handle's centreline at the body origin's x
 (``grasp_y_obj_m``): with our finger model and our impedance's few-mm tracking error, their
 grasp loses about one demo in four (docs/hammer_basket.md,
-``python -m impact_eval.experiments.hammer_basket_grasp``).
+``python -m impact_experiments.hammer_basket_grasp``).
 """
 
 from __future__ import annotations

@@ -13,8 +13,8 @@ from impact_control.controller import ImpactController
 from impact_control.errors import InvalidArgumentError
 from impact_control.ik import HOME_Q
 from impact_control.presets import preset_config
-from impact_eval.experiments.physics import Rig
-from impact_eval.experiments.press import press
+from impact_experiments.physics import Rig
+from impact_experiments.press import press
 
 GUARD_ON = ContactGuardConfig(enabled=True)
 

@@ -105,7 +105,7 @@ def test_a_diverging_in_kernel_step_is_reported() -> None:
 def test_numba_learner_in_the_controller_learns_a_payload() -> None:
     """A 3 kg payload held under the in-kernel learner: SGD steps run inside the tick and the
     prediction learns the load (robot-on-environment sign: +z)."""
-    from impact_eval.experiments.physics import Rig
+    from impact_experiments.physics import Rig
 
     rig = Rig.build("payload_scene.xml", "impact", "residual", seed=0)
     cfg = ControllerConfig(internal_model=InternalModelConfig(learner="numba"))
@@ -134,7 +134,7 @@ def test_spread_must_finish_before_the_next_step() -> None:
 def test_tick_latency_benchmark_runs_and_reports_both_learners(tmp_path) -> None:
     import json
 
-    from impact_eval.experiments import tick_latency
+    from impact_experiments import tick_latency
 
     assert tick_latency.main(["--seconds", "0.3", "--switch-s", "0.1", "--out",
                               str(tmp_path)]) == 0

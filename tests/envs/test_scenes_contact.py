@@ -51,7 +51,7 @@ def test_a_scene_without_finger_hammer_pairs_is_refused_in_one_line(env_id: str)
 ])
 def test_contact_paired_bad_input_is_one_line_and_writes_nothing(argv, message, tmp_path,
                                                                  capsys) -> None:
-    from impact_eval.experiments.contact_paired import main
+    from impact_experiments.contact_paired import main
 
     out = tmp_path / "x.csv"
     with pytest.raises(SystemExit) as exit_:

@@ -15,8 +15,8 @@ from fixtures.eval_fake import corrupt_checkpoint, sweep_args
 from fixtures.fake_reach import collect_demos
 
 from impact_eval import bench, cli
-from impact_eval.experiments import adaptation
 from impact_eval.methods import CHECKPOINTS_ENV_VAR
+from impact_experiments import adaptation
 from impact_learn import collect as collect_module
 from impact_learn import train as train_module
 

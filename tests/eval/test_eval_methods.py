@@ -102,8 +102,8 @@ def test_sb3_method_sweeps(sac_zip: Path, tmp_path: Path, monkeypatch) -> None:
 
 
 def test_trace_prints_one_episode():
-    """python -m impact_eval.experiments.trace: header, sampled rows, and the outcome line."""
-    import impact_eval.experiments.trace as trace_mod
+    """python -m impact_experiments.trace: header, sampled rows, and the outcome line."""
+    import impact_experiments.trace as trace_mod
 
     lines = trace_mod.trace("IMPACT/Hammer-v1", "scripted_impact", 0.2, seed=0, every=60)
     assert lines[0] == trace_mod.HEADER
@@ -114,7 +114,7 @@ def test_trace_prints_one_episode():
 def test_trace_without_joint_friction_zeroes_the_plants_friction(monkeypatch):
     """--no-joint-friction: the arm's dof friction is 0 in the episode's model (after reset),
     and a Calligraphy trace ends with the writing summary."""
-    import impact_eval.experiments.trace as trace_mod
+    import impact_experiments.trace as trace_mod
     from impact_eval import envs as envs_mod
 
     made = []
@@ -137,7 +137,7 @@ def test_trace_without_joint_friction_zeroes_the_plants_friction(monkeypatch):
                                   ["--env", "IMPACT/Nope-v0", "--method", "scripted",
                                    "--value", "1"]])
 def test_trace_bad_input_is_one_line_exit_2(argv, capsys):
-    import impact_eval.experiments.trace as trace_mod
+    import impact_experiments.trace as trace_mod
 
     with pytest.raises(SystemExit) as exc:
         trace_mod.main(argv)

@@ -24,7 +24,7 @@ SIM_BUDGET_MS = 10.0
 budget monitor itself: the simulator's physics shares this machine's cores with the client
 (CI: 2 cores, other jobs beside), so a tick's compute time here says nothing about an FR3's
 PC. The robot's 0.8 ms default is measured by
-``python -m impact_eval.experiments.tick_latency``, not here;
+``python -m impact_experiments.tick_latency``, not here;
 10 ms is the largest ``--budget-ms`` accepts and still stops a loop that has hung."""
 SIM_BUDGET = ["--budget-ms", f"{SIM_BUDGET_MS:g}"]
 """``SIM_BUDGET_MS`` as ``impact-robot`` arguments."""

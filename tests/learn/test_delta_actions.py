@@ -10,7 +10,7 @@ from fixtures.reach_demos import write_dataset
 
 from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.diffusion.config import DiffusionConfig
-from impact_eval.experiments.dp_inference_cost import random_policy
+from impact_experiments.dp_inference_cost import random_policy
 from impact_learn.dataset import EpisodeMeta, ReplayWriter, load_replay
 from impact_learn.train_data import load_train_data
 

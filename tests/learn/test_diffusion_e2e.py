@@ -19,7 +19,7 @@ from impact_control.errors import InvalidArgumentError
 from impact_control.policy import stack_obs
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
-from impact_eval.experiments.dp_inference_cost import random_policy
+from impact_experiments.dp_inference_cost import random_policy
 from impact_learn import collect as collect_module
 from impact_learn.collect import collect
 from impact_learn.collect_config import CollectConfig, parse_param_spec

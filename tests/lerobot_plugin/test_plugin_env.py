@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from impact_control.errors import InvalidArgumentError
-from impact_eval.bins import draw_in_bin
+from impact_envs.tasks.bins import draw_in_bin
 from impact_learn.dataset import EpisodeMeta, ReplayWriter
 from impact_lerobot import TASKS, PluginSettings, make_lerobot_env, observation_plan
 from impact_lerobot.env import scalar_info

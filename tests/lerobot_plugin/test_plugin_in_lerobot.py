@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from impact_eval.bins import draw_in_bin
+from impact_envs.tasks.bins import draw_in_bin
 
 ROOT = Path(__file__).resolve().parents[2]
 CHECK = Path(__file__).resolve().parent / "lerobot_plugin_check.py"

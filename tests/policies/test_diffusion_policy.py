@@ -12,8 +12,8 @@ from impact_control.errors import CheckpointError, InvalidArgumentError
 from impact_control.policy import Policy
 from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.diffusion.policy import DiffusionPolicy
-from impact_eval.experiments.dp_inference_cost import main as bench_main
-from impact_eval.experiments.dp_inference_cost import measure_inference, random_policy
+from impact_experiments.dp_inference_cost import main as bench_main
+from impact_experiments.dp_inference_cost import measure_inference, random_policy
 
 torch.set_num_threads(1)
 SMALL = DiffusionConfig(down_dims=(16, 32), diffusion_step_embed_dim=16, num_inference_steps=4)
@@ -188,7 +188,7 @@ def test_measure_inference_reports_costs():
 
 def test_bench_prints_policy_cost_next_to_env_cost(capsys, monkeypatch):
     """One run prints the DDIM cost per env step, the env's step cost and their ratio."""
-    import impact_eval.experiments.dp_inference_cost as bench
+    import impact_experiments.dp_inference_cost as bench
 
     monkeypatch.setattr(bench, "random_policy", lambda: random_policy(SMALL))
     real = bench.measure_env_step

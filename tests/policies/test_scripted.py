@@ -10,7 +10,7 @@ import pytest
 from impact_control.errors import InvalidArgumentError
 from impact_envs.policies.experts import make_expert
 from impact_envs.policies.scripted import CARRY, LOWER
-from impact_eval.experiments.adaptation import protocol_expert
+from impact_experiments.adaptation import protocol_expert
 
 
 def _carry_obs(goal: np.ndarray, carry_z: float) -> dict[str, np.ndarray]:

@@ -136,7 +136,7 @@ def test_an_fr3_at_rest_shows_the_reported_wrench_offsets() -> None:
     """Issue 39's acceptance: under ``realism="fr3"``, at rest at 5 poses without contact and
     under plain impedance, the estimated external force is 0.5-3 N and differs between poses
     (franka_ros issue 404 reports (1.40, -0.37, 1.72) N at rest). Ideal: under 0.3 N."""
-    from impact_eval.experiments.rest_offsets import rest_wrenches
+    from impact_experiments.rest_offsets import rest_wrenches
 
     forces = np.array([w[:3] for w in rest_wrenches("fr3", 11)])
     norms = np.linalg.norm(forces, axis=1)

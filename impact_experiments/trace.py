@@ -1,0 +1,120 @@
+"""``python -m impact_experiments.trace``: print one episode of a method, every N policy steps.
+
+Usage::
+
+    python -m impact_experiments.trace --env IMPACT/Hammer-v1 --method augmented_dp \
+        --value 0.1 --seed 1
+
+Columns: policy step, TCP height, commanded target height, gripper command, object height,
+internal-model prediction / slow estimate / raw estimate of the vertical wrench [N], gate
+state, the saturated-lift release's scale on the feedforward (``rel_s``, 1 when it does not
+act) and the largest robot-table contact force of the step (``hand_n`` [N]). The last line
+counts, per joint, the policy steps whose final torque sat at the FR3 limit (87 / 12 Nm).
+The traces quoted in docs/results.md come from this command. Calligraphy adds the writing
+summary (force in band, stroke RMS) on the last line.
+``--robot-set FIELD=VALUE`` changes the robot as in impact-eval (e.g. ``realism=fr3``).
+``--no-joint-friction`` zeroes the arm joints' Coulomb friction in the simulated plant (an
+ablation of the robot, not of the controller), to see what the friction dead-band costs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from impact_control.errors import ImpactError
+from impact_control.policy import stack_obs
+from impact_envs.cli import add_robot_set
+from impact_eval.envs import check_env_id, describe_env, make_env
+from impact_eval.methods import resolve_method
+
+HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate  rel_s  hand_n"
+
+
+def open_method(env_id: str, method: str, overrides: Sequence[str] = (),
+                robot_overrides: Sequence[str] = ()) -> tuple[object, object]:
+    """(env, policy) of ``method`` on ``env_id``, as impact-eval builds them (the method's
+    controller, preset and robot, e.g. ``impact_authors``' commanded torque reading)."""
+    spec = resolve_method(method)
+    env = make_env(check_env_id(env_id), spec.controller, overrides, spec.preset,
+                   robot=spec.robot, robot_overrides=robot_overrides)
+    return env, spec.build(env_id, env)
+
+
+def start_episode(env, policy, value: float, seed: int) -> dict:
+    """Reset ``env`` at the parameter ``value`` with the episode ``seed`` and the policy for
+    one env, its sampling noise from the same seed (as impact-eval); the first observation."""
+    obs, _ = env.reset(seed=seed, options={describe_env(env).param_name: value})
+    policy.reset(1)
+    if hasattr(policy, "seed_envs"):
+        policy.seed_envs([seed])
+    return obs
+
+
+def trace(env_id: str, method: str, value: float, seed: int, every: int,
+          overrides: Sequence[str] = (), joint_friction: bool = True,
+          robot_overrides: Sequence[str] = ()) -> list[str]:
+    """Run one episode (until success or the step limit); return the printed lines."""
+    env, policy = open_method(env_id, method, overrides, robot_overrides)
+    limit = np.asarray(env.unwrapped.controller.config.limits.torque_max_nm)
+    saturated = np.zeros(len(limit), dtype=int)
+    release = env.unwrapped.controller.optional.saturation_release
+    if not joint_friction:
+        sim = env.unwrapped.sim
+        sim.model.dof_frictionloss[sim.arm_dof] = 0.0
+    obs = start_episode(env, policy, value, seed)
+    lines, step, done = [HEADER], 0, False
+    while not done:
+        action = np.asarray(policy.act(stack_obs([obs]))[0])
+        obs, _, terminated, truncated, info = env.step(action)
+        done = terminated or truncated or bool(info["is_success"])
+        saturated += np.abs(info["tau_nm"]) >= limit - 0.05
+        if step % every == 0 or done:
+            lines.append(
+                f"{step:4d} {obs['ee_pos'][2]:6.3f} {action[2]:6.3f} {action[9]:5.2f} "
+                f"{obs['object_pos'][2]:6.3f} {info['wrench_pred_world'][2]:7.1f} "
+                f"{info['wrench_slow_world'][2]:7.1f} {info['wrench_ext_world'][2]:7.1f} "
+                f"{int(info['gate_open']):5d} {release.scale:6.2f} "
+                f"{info['peak_robot_contact_force_n']:7.1f}")
+        step += 1
+    end = (f"success: {bool(info['is_success'])} after {step} steps; steps ending at a joint "
+           f"torque limit, joints 1-7: {saturated.tolist()}")
+    if "in_band_frac" in info:
+        end += (f"; writing: force in band {info['in_band_frac']:.0%}, "
+                f"stroke RMS {1e3 * info['stroke_rms_m']:.1f} mm")
+    lines.append(end)
+    env.close()
+    return lines
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--env", default="IMPACT/Hammer-v1")
+    parser.add_argument("--method", required=True, help="a method name of impact-eval")
+    parser.add_argument("--value", type=float, required=True, help="the env's parameter value")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--every", type=int, default=30, help="print every N policy steps")
+    parser.add_argument("--controller-set", action="append", default=[],
+                        metavar="SECTION.FIELD=VALUE", help="as impact-eval --controller-set")
+    parser.add_argument("--no-joint-friction", action="store_true",
+                        help="zero the arm joints' Coulomb friction in the simulated plant")
+    add_robot_set(parser)
+    args = parser.parse_args(argv)
+    if args.every < 1:
+        parser.error(f"invalid --every {args.every}; valid: >= 1")
+    try:
+        lines = trace(args.env, args.method, args.value, args.seed, args.every,
+                      args.controller_set, joint_friction=not args.no_joint_friction,
+                      robot_overrides=args.robot_set)
+    except ImpactError as exc:  # unknown env / method, bad value, missing checkpoint
+        print(f"{parser.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        raise SystemExit(2) from None
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
