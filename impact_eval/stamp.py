@@ -19,7 +19,7 @@ from impact_control.errors import ImpactError, InvalidArgumentError
 
 
 def evaluation_entry(results: Path, method: str) -> dict:
-    """Successes per parameter value of ``method`` in ``results/episodes.csv``."""
+    """Successes per parameter value of ``method`` in a sweep's ``episodes.csv``."""
     episodes = pd.read_csv(results / "episodes.csv")
     rows = episodes[episodes["method"] == method]
     if rows.empty:

@@ -31,7 +31,7 @@ def franky_sim():
 @pytest.fixture()
 def franka_sim():
     """franka-sim 1.1.7 on 127.0.0.1:1337 with its communication-constraint and motion-limit
-    checks on (tests/franka_sim_server.py), for one test."""
+    checks on (tests/franka/franka_sim_server.py), for one test."""
     python = simulator_python("IMPACT_FRANKA_SIM_PYTHON")
     with serving([python, str(HERE.joinpath("franka_sim_server.py"))]) as host:
         yield host
