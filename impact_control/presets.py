@@ -19,7 +19,8 @@ each one alone is in docs/results.md.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 
 from impact_control.authors_presets import AUTHORS_PRESETS, SIM_ONLY, authors_config
 from impact_control.config import ControllerConfig
@@ -64,11 +65,59 @@ DEPARTURES: dict[str, str] = {
 keys, the syntax of ``--controller-set``; ``revert_departure`` applies one)."""
 
 
+@dataclass(frozen=True)
+class Preset:
+    """A controller configuration and the name it travels under, resolved once
+    (``resolve_preset``) and carried together to the env, its ``info["controller_preset"]``
+    and the run's records: nothing downstream turns a config back into a name.
+
+    Attributes:
+        name: one of ``PRESETS``, or ``"custom"`` (a preset with ``SECTION.FIELD=VALUE``
+            overrides, or a ``ControllerConfig`` given as it is that equals no preset).
+        config: the controller's configuration.
+    """
+
+    name: str
+    config: ControllerConfig
+
+
+CUSTOM = "custom"
+"""The name of a configuration that is no preset as it stands."""
+
+
+def resolve_preset(name: str, overrides: Sequence[str] = (),
+                   label: str = "controller_preset") -> Preset:
+    """Preset ``name`` (one of ``PRESETS``; a one-line error naming them, as ``label``) with
+    ``SECTION.FIELD=VALUE`` ``overrides`` applied (``impact_control.overrides``): named
+    ``name`` without overrides, ``"custom"`` with them."""
+    check_choice(label, name, PRESETS)
+    config = _preset_config(name)
+    if overrides:
+        return Preset(CUSTOM, apply_overrides(config, list(overrides)))
+    return Preset(name, config)
+
+
+def as_preset(given: str | ControllerConfig | Preset) -> Preset:
+    """What an env's ``controller_preset`` argument was given, as a ``Preset``: a name is
+    resolved, a ``Preset`` kept, and a bare ``ControllerConfig`` named after the preset it
+    equals field for field (else ``"custom"``): the one place a config is matched to a name,
+    for users who build a config themselves."""
+    if isinstance(given, Preset):
+        return given
+    if isinstance(given, ControllerConfig):
+        return Preset(preset_name(given), given)
+    return resolve_preset(given)
+
+
 def preset_config(name: str, estimator: str | None = None) -> ControllerConfig:
     """The ``ControllerConfig`` of preset ``name`` (one of ``PRESETS``), with the wrench
     estimator of kind ``estimator`` (``ESTIMATOR_KINDS``: "residual", the presets', or
     "momentum") when given."""
     check_choice("controller preset", name, PRESETS)
+    return _preset_config(name, estimator)
+
+
+def _preset_config(name: str, estimator: str | None = None) -> ControllerConfig:
     if name in AUTHORS_PRESETS:
         if estimator is not None:
             raise InvalidArgumentError(
@@ -96,9 +145,9 @@ def revert_departures(config: ControllerConfig, keys: object) -> ControllerConfi
 def preset_name(config: ControllerConfig) -> str:
     """Name of the preset ``config`` equals field for field, else ``"custom"``."""
     for name in PRESETS:
-        if preset_config(name) == config:
+        if _preset_config(name) == config:
             return name
-    return "custom"
+    return CUSTOM
 
 
 def check_robot_preset(name: str) -> str:

@@ -12,6 +12,7 @@ import gymnasium as gym
 import numpy as np
 
 from impact_control.errors import ImpactError, InvalidArgumentError
+from impact_control.presets import resolve_preset
 from impact_envs.versions import check_not_retired
 from impact_eval.grid import plain_number
 
@@ -84,9 +85,12 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
     line instead of silently running another configuration.
     """
     extra: dict[str, object] = {}
+    resolved = resolve_preset(preset, overrides)  # name and config travel together
     if env_id.split(":")[-1].startswith("IMPACT/"):
         extra["terminate_on_success"] = True
-        extra["controller_preset"] = preset
+        extra["controller_preset"] = resolved
+    elif overrides:  # an env of another namespace takes a name or a ControllerConfig
+        extra["controller_preset"] = resolved.config
     elif preset != "default":
         extra["controller_preset"] = preset
     if observation is not None:
@@ -97,11 +101,6 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
         robot = apply_robot_overrides(robot, robot_overrides)  # type: ignore[arg-type]
     if robot is not None:
         extra["robot"] = robot  # a RobotOptions (the *_authors methods' torque reading)
-    if overrides:
-        from impact_control.overrides import apply_overrides
-        from impact_control.presets import preset_config
-
-        extra["controller_preset"] = apply_overrides(preset_config(preset), overrides)
     try:
         if render:
             extra["render_mode"] = "rgb_array"

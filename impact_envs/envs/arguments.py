@@ -10,10 +10,8 @@ import inspect
 from collections.abc import Mapping
 from typing import TypeVar
 
-from impact_control.config import ControllerConfig
 from impact_control.controller import CONTROLLERS
 from impact_control.errors import InvalidArgumentError, check_choice
-from impact_control.presets import PRESETS, preset_config, preset_name
 from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.tasks.base import Task
 
@@ -37,21 +35,11 @@ def load_task(ref: str) -> Task:
     return task_cls()
 
 
-def controller_config(preset: str | ControllerConfig) -> tuple[ControllerConfig, str]:
-    """The env's controller config and its preset name: the named preset, or a
-    ``ControllerConfig`` as given (named after the preset it equals, else "custom")."""
-    if isinstance(preset, ControllerConfig):
-        return preset, preset_name(preset)
-    return preset_config(preset), preset
-
-
-def check_args(controller: str, reward_type: str, controller_preset: str | ControllerConfig,
-               render_mode: str | None, render_modes: list[str]) -> None:
-    """One-line errors naming the valid choices."""
+def check_args(controller: str, reward_type: str, render_mode: str | None,
+               render_modes: list[str]) -> None:
+    """One-line errors naming the valid choices (the preset's: ``presets.as_preset``)."""
     check_choice("controller", controller, CONTROLLERS)
     check_choice("reward_type", reward_type, REWARD_TYPES)
-    if not isinstance(controller_preset, ControllerConfig):
-        check_choice("controller_preset", controller_preset, PRESETS)
     if render_mode is not None:
         check_choice("render_mode", render_mode, render_modes)
 

@@ -22,11 +22,11 @@ from impact_control.controller import ImpactController
 from impact_control.errors import InvalidArgumentError
 from impact_control.internal_model import ModelSnapshot
 from impact_control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
+from impact_control.presets import Preset, as_preset
 from impact_control.rates import CONTROL_HZ, POLICY_HZ
 from impact_envs._gl import make_renderer
 from impact_envs.envs.arguments import (
     check_args,
-    controller_config,
     env_options,
     initial_params,
     load_task,
@@ -78,7 +78,7 @@ class ImpactEnv(gym.Env):
         controller: Literal["impact", "impedance"] = "impact",
         object_mass: float | None = None,
         task_params: dict[str, float] | None = None,
-        controller_preset: str | ControllerConfig = "default",
+        controller_preset: str | ControllerConfig | Preset = "default",
         robot: RobotOptions | Mapping[str, Any] | None = None,
         persist_internal_model: bool = False,
         terminate_on_success: bool = False,
@@ -92,8 +92,8 @@ class ImpactEnv(gym.Env):
         self._init_kwargs = {k: v for k, v in locals().items()
                              if k not in ("self", "__class__", "unknown")}
         """The constructor's arguments (``__deepcopy__`` and pickling rebuild from them)."""
-        check_args(controller, reward_type, controller_preset, render_mode,
-                   self.metadata["render_modes"])
+        check_args(controller, reward_type, render_mode, self.metadata["render_modes"])
+        preset = as_preset(controller_preset)  # resolved once, name and config together
         robot, render, obs_opts = env_options(robot, render, observation)
         self.reward_type, self.render_mode = reward_type, render_mode
         self.controller_mode = controller
@@ -107,10 +107,10 @@ class ImpactEnv(gym.Env):
         """The robot profile's name (``info["robot_profile"]``; ``RobotOptions.realism``)."""
         task.bind(self.sim)
         self._params = params
-        cfg, self.controller_preset = controller_config(controller_preset)
+        self.controller_preset = preset.name
         """Name of the controller preset in use ("default", "paper"; "custom" otherwise)."""
         limit_torch_threads()
-        self.controller = ImpactController(self.dynamics, cfg, mode=controller)
+        self.controller = ImpactController(self.dynamics, preset.config, mode=controller)
         self.loop = ClosedLoop(self.sim, self.dynamics, self.controller,
                                task.before_tick if task.has_tick_hook else None,
                                command_loss_rate=self.realism.command_loss_rate)

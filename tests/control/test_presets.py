@@ -15,8 +15,11 @@ from impact_control.overrides import apply_overrides
 from impact_control.presets import (
     DEPARTURES,
     PRESETS,
+    Preset,
+    as_preset,
     preset_config,
     preset_name,
+    resolve_preset,
     revert_departures,
 )
 
@@ -118,3 +121,22 @@ def test_issue_54_presets_are_default_plus_their_fields_only(name: str) -> None:
     assert dataclasses.replace(watch, saturation_release=default.saturation_release) == default
     assert default.saturation_release.lift_watch_s == float("inf")  # off in default
     assert not default.saturation_release.spare_carried
+
+
+def test_a_preset_is_resolved_once_and_travels_with_its_name() -> None:
+    """issue 57: the name and the config go together; the env never matches a config back to a
+    name when it is given a ``Preset``."""
+    assert resolve_preset("keep_carried") == Preset("keep_carried", preset_config("keep_carried"))
+    tuned = resolve_preset("paper", ["internal_model.learning_rate=0.02"])
+    assert tuned.name == "custom" and tuned.config.internal_model.learning_rate == 0.02
+    # a bare config equal to a preset is named after it (users who build one themselves)
+    assert as_preset(preset_config("keep_carried")).name == "keep_carried"
+    assert as_preset(tuned) is tuned
+    with pytest.raises(InvalidArgumentError, match="invalid controller_preset 'literal'"):
+        resolve_preset("literal")
+    # a Preset's name is the env's, as given: the default config under a name of its own
+    env = gym.make("IMPACT/Hammer-v1", controller_preset=Preset("mine", ControllerConfig()))
+    assert env.unwrapped.controller_preset == "mine"
+    assert env.unwrapped.controller.config == ControllerConfig()
+    env.close()
+

@@ -239,3 +239,16 @@ def test_camera_methods_make_their_envs_with_the_checkpoint_cameras():
         assert env.unwrapped.observation_options == RGB_OBSERVATION
     finally:
         env.close()
+
+
+def test_the_sweep_passes_a_resolved_preset() -> None:
+    from impact_eval.envs import make_env  # the sweep's env factory
+
+    env = make_env("IMPACT/Hammer-v1", "impact", preset="keep_carried")
+    assert env.unwrapped.controller_preset == "keep_carried"
+    env.close()
+    env = make_env("IMPACT/Hammer-v1", "impact", ["internal_model.learning_rate=0.02"],
+                   preset="keep_carried")
+    assert env.unwrapped.controller_preset == "custom"
+    assert env.unwrapped.controller.config.saturation_release.spare_carried
+    env.close()
