@@ -178,7 +178,7 @@ def _check_args(args: argparse.Namespace) -> None:
         raise InvalidArgumentError(f"need --image-size >= 1, got {args.image_size}")
     env = gym.make(args.env)
     try:
-        env.unwrapped.task.param("object_mass").validate(args.mass)
+        env.unwrapped.task.mass_param().validate(args.mass)  # every bench env declares one
         size = args.image_size
         check_view(env.unwrapped.sim.model, "--image-size", (), size, size)
     finally:

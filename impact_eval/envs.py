@@ -57,12 +57,16 @@ def check_env_id(env_id: str) -> str:
 
 
 def check_masses(env_id: str, masses: Sequence[float]) -> None:
-    """One-line ``InvalidArgumentError`` for a mass outside ``env_id``'s ``object_mass`` range
-    (checked before a run writes anything)."""
+    """One-line ``InvalidArgumentError`` for a mass outside the range of ``env_id``'s mass
+    (``Task.mass_param``; checked before a run writes anything)."""
     env = gym.make(env_id)
     try:
+        task = env.unwrapped.task
+        declared = task.mass_param()
+        if declared is None:
+            raise InvalidArgumentError(f"{env_id} declares no mass; valid: an env with one")
         for mass in masses:
-            env.unwrapped.task.param("object_mass").validate(mass)
+            declared.validate(mass)
     finally:
         env.close()
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from impact_envs.tasks.bins import MASS_PARAM
 from impact_eval.safety import (
     FF_PRESS_COLUMNS,
     NET_CONTACT_COLUMNS,
@@ -51,11 +52,11 @@ SUSTAINED_PEAK_COLUMN = "peak_contact_sustained_n"
 
 EPISODE_INFO_COLUMNS: tuple[str, ...] = ("drawn_mass_kg", "robot_profile")
 """What the env used in the episode, as its ``info`` reports it: ``drawn_mass_kg`` from
-``info["object_mass"]`` (the manipulated object's mass the env set for the episode [kg]; NaN
+``info[<the task's mass parameter>]`` (``object_mass``, Calligraphy's ``tool_mass``: the mass
+the env set for the episode [kg]; ``info["object_mass"]`` for an env without a task; NaN
 when the env reports none) and ``robot_profile`` from ``info["robot_profile"]`` (the simulated
 robot's profile, ``"ideal"`` for every IMPACT env today; ``""`` when the env reports none)."""
 
-DRAWN_MASS_INFO_KEY = "object_mass"
 ROBOT_PROFILE_INFO_KEY = "robot_profile"
 
 ADDED_COLUMNS: dict[str, tuple[str, ...]] = {
@@ -134,6 +135,8 @@ class EpisodeTracker:
     _robot_contact: list[np.ndarray] = field(default_factory=list)
     _ff_into_contact: list[np.ndarray] = field(default_factory=list)
     _contact_net: list[np.ndarray] = field(default_factory=list)
+    mass_key: str = MASS_PARAM
+    """The ``info`` key of the env's mass (``bins.mass_info_key``)."""
     _drawn_mass: float = math.nan
     _robot_profile: str = ""
 
@@ -151,8 +154,8 @@ class EpisodeTracker:
 
     def _note_setup(self, info: Mapping[str, object]) -> None:
         """Keep the latest ``EPISODE_INFO_COLUMNS`` values ``info`` reports."""
-        if DRAWN_MASS_INFO_KEY in info:
-            mass = _reduce(info[DRAWN_MASS_INFO_KEY], "max")
+        if self.mass_key in info:
+            mass = _reduce(info[self.mass_key], "max")
             self._drawn_mass = math.nan if mass is None else mass
         if ROBOT_PROFILE_INFO_KEY in info:
             self._robot_profile = one_line(str(info[ROBOT_PROFILE_INFO_KEY]))

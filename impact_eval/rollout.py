@@ -14,6 +14,7 @@ import numpy as np
 
 from impact_control.errors import SimulationError
 from impact_control.policy import FinishingPolicy, Policy, SeededPolicy, stack_obs
+from impact_envs.tasks.bins import MASS_PARAM, mass_info_key
 from impact_eval.metrics import EpisodeTracker
 
 
@@ -81,6 +82,8 @@ class LockstepBatch:
         self.policy_dt = policy_dt
         self.videos = videos or {}
         """Batch index -> ``video.EpisodeVideo`` of the episodes recorded (``--video``)."""
+        self.mass_key = mass_info_key(envs[0]) if envs else MASS_PARAM
+        """The ``info`` key of the env's mass (``episodes.csv``'s ``drawn_mass_kg``)."""
         self.with_press_diagnostics = False
         """Add ``safety.FF_PRESS_COLUMNS`` and ``NET_CONTACT_COLUMNS`` to each finished
         episode's columns (issue 54's
@@ -101,7 +104,7 @@ class LockstepBatch:
         self.policy.reset(n)
         if isinstance(self.policy, SeededPolicy):  # per-episode noise, whatever the batch
             self.policy.seed_envs([job.seed for job in jobs])
-        trackers = [EpisodeTracker(self.policy_dt) for _ in range(n)]
+        trackers = [EpisodeTracker(self.policy_dt, mass_key=self.mass_key) for _ in range(n)]
         obs = [self._reset(i, job, trackers[i], on_finish) for i, job in enumerate(jobs)]
         while not all(t.done for t in trackers):
             if heartbeat is not None:

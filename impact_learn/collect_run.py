@@ -10,6 +10,7 @@ import gymnasium as gym
 import numpy as np
 
 from impact_control.policy import stack_obs
+from impact_envs.tasks.bins import mass_info_key
 from impact_learn.collect_config import CollectConfig
 
 
@@ -83,8 +84,9 @@ def _reset_all(
         obs_list.append(obs)
         requested = np.nan if param is None else param
         params.append(float(info.get(attempts.param_name, requested)))
-        mass_default = params[-1] if attempts.param_name == "object_mass" else np.nan
-        masses.append(float(info.get("object_mass", mass_default)))
+        mass_key = mass_info_key(env)  # the task's declared mass (Calligraphy: tool_mass)
+        mass_default = params[-1] if attempts.param_name == mass_key else np.nan
+        masses.append(float(info.get(mass_key, mass_default)))
     return obs_list, np.asarray(masses), np.asarray(params)
 
 

@@ -32,8 +32,8 @@ exported, docs/lerobot.md), so a policy trained on an export sees the same featu
 
 
 def mass_param(task: type[Task]) -> TaskParam:
-    """The task parameter a mass setting sets: ``object_mass``, else the task's first
-    parameter in kg (Calligraphy: ``tool_mass``), the one ``impact-eval --mass-bins`` draws
+    """The task parameter a mass setting sets: the one the task declares ``is_mass``
+    (Calligraphy: ``tool_mass``), the one ``impact-eval --mass-bins`` draws
     (``bins.mass_param_name``; on Disturbance with ``--param object_mass``)."""
     name = mass_param_name(task.params)
     if name is None:

@@ -46,7 +46,8 @@ def check_args(controller: str, reward_type: str, render_mode: str | None,
 
 def initial_params(task: Task, object_mass: float | None,
                    task_params: Mapping[str, float] | None) -> dict[str, float]:
-    """The task's defaults, then the ``object_mass`` shorthand, then ``task_params``.
+    """The task's defaults, then the ``object_mass`` shorthand (the task's mass,
+    ``Task.mass_param``: Calligraphy's ``tool_mass``), then ``task_params``.
 
     One-line errors: ``task_params`` not a mapping, a key that is not one of the task's
     parameters, a bad value, and ``object_mass`` given by both routes with two different
@@ -59,13 +60,18 @@ def initial_params(task: Task, object_mass: float | None,
     given = {name: task.param(name).validate(value)
              for name, value in (task_params or {}).items()}
     if object_mass is not None:
-        mass = task.param("object_mass").validate(object_mass)
-        if given.get("object_mass", mass) != mass:
+        declared = task.mass_param()
+        if declared is None:
+            raise InvalidArgumentError(
+                f"object_mass given, and {task.name} declares no mass; valid: task_params of "
+                f"{', '.join(p.name for p in task.params)}")
+        name, mass = declared.name, declared.validate(object_mass)
+        if given.get(name, mass) != mass:
             raise InvalidArgumentError(
                 f"object_mass given twice with different values: object_mass={object_mass!r} "
-                f"and task_params['object_mass']={task_params['object_mass']!r}; valid: one "
+                f"and task_params[{name!r}]={task_params[name]!r}; valid: one "  # type: ignore[index]
                 "of them, or both equal")
-        params["object_mass"] = mass
+        params[name] = mass
     params.update(given)
     return params
 

@@ -52,7 +52,7 @@ class CalligraphyEnv(ImpactEnv):
     ≤ 5 mm (``stroke_rms_m``), tip normal force in [7.5, 22.5] N for ≥ 90 % of them
     (``in_band_frac``), and no contact gap longer than 50 ms (``contact_lost``). Per step,
     ``info`` also has ``normal_force_n``, ``in_band``, ``pressing``, ``writing``,
-    ``character`` and ``object_mass`` (= the tool mass); once writing is done,
+    ``character``, ``tool_mass`` and (v1 only) its alias ``object_mass``; once writing is done,
     ``failure_reason`` names the missed criteria ("" if none; impact-eval records it).
 
     ## Randomization

@@ -26,13 +26,18 @@ from impact_envs.robot.sim import FrankaSim
 
 @dataclass(frozen=True)
 class TaskParam:
-    """A physical parameter a task varies (the evaluation sweep axis is the first one).
+    """A physical parameter a task varies (the evaluation sweep axis is the first one),
+    declared once: every consumer (``impact-eval``, ``impact-collect``, the LeRobot plugin,
+    ``episodes.csv``, ``info``) reads its name, range, unit and whether it is a mass from here.
 
     Attributes:
         name: key used in ``reset(options={name: value})``, env kwargs and ``info``.
         default: nominal value.
         low, high: valid range (inclusive).
         unit: unit string for plots and docs.
+        is_mass: whether it is a mass [kg] a mass bin may draw; the task's first such
+            parameter is its mass (``Task.mass_param``: ``info`` reports it under its own
+            name, ``episodes.csv`` records it as ``drawn_mass_kg``).
     """
 
     name: str
@@ -40,6 +45,13 @@ class TaskParam:
     low: float
     high: float
     unit: str
+    is_mass: bool = False
+
+    def __post_init__(self) -> None:
+        if self.is_mass and self.unit != "kg":
+            raise InvalidArgumentError(
+                f"invalid TaskParam {self.name!r}: is_mass with unit {self.unit!r}; valid: "
+                "unit 'kg' for a mass")
 
     def validate(self, value: float) -> float:
         """Return ``value`` as float, or raise a one-line error naming the valid range.
@@ -174,6 +186,11 @@ class Task(ABC):
     def param_name(self) -> str:
         """The sweep axis (first parameter)."""
         return self.params[0].name
+
+    @classmethod
+    def mass_param(cls) -> TaskParam | None:
+        """The task's mass: its first parameter declared ``is_mass`` (None: it has none)."""
+        return next((p for p in cls.params if p.is_mass), None)
 
     def param(self, name: str) -> TaskParam:
         """The parameter called ``name`` or a one-line error naming the valid ones."""

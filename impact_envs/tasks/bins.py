@@ -6,8 +6,8 @@ the same episode (paired, as the grid's seeds are), and ``episodes.csv`` records
 ``drawn_mass_kg``. A bin is keyed by its lower edge: ``param_value`` is ``lo`` and the row's
 ``param_name`` is ``<param>_bin`` (``bin_param_name``); run.json records every bin's upper edge.
 
-A bin draws the env's mass (``mass_param_name``: ``object_mass``, else its first parameter in
-kg), the one ``drawn_mass_kg`` records and the LeRobot plugin's ``mass_bin`` draws; a bin of
+A bin draws the env's mass (``mass_param_name``: the parameter its task declares ``is_mass``),
+the one ``drawn_mass_kg`` records and the LeRobot plugin's ``mass_bin`` draws; a bin of
 any other parameter (a push in N, a friction) is refused (``check_bin_param``).
 """
 
@@ -23,8 +23,9 @@ from impact_control.errors import InvalidArgumentError
 from impact_envs.tasks.values import GRID_DECIMALS, plain_number
 
 MASS_PARAM = "object_mass"
-"""The mass a bin draws where the env declares it (else its first parameter in kg); the
-env reports it as ``info["object_mass"]``, which ``episodes.csv`` records as ``drawn_mass_kg``."""
+"""The mass of an env that declares no task parameter (a foreign env): what it reports as
+``info["object_mass"]`` is recorded as ``drawn_mass_kg``. An IMPACT env's mass is the parameter
+its task declares ``is_mass`` (``mass_param_name``), reported under its own name."""
 
 _BINS_HELP = ("expected a comma list of LO-HI bins in kg, ascending and not overlapping "
               "(e.g. 0.1-0.3,0.3-0.5,0.5-1)")
@@ -125,15 +126,12 @@ def bin_param_name(param_name: str) -> str:
 
 def mass_param_name(params: Sequence[object]) -> str | None:
     """The parameter a mass bin draws (and the LeRobot plugin's ``object_mass`` and
-    ``mass_bin`` set), among an env's declared ``TaskParam``s: ``object_mass``, else the first
-    in kg (Calligraphy: ``tool_mass``); ``object_mass`` for an env that declares none; None
-    where none is a mass."""
+    ``mass_bin`` set), among an env's declared ``TaskParam``s: the first declared ``is_mass``
+    (``Task.mass_param``; Calligraphy: ``tool_mass``); ``object_mass`` for an env that
+    declares no parameter; None where none is a mass."""
     if not params:
         return MASS_PARAM
-    names = [str(getattr(p, "name", "")) for p in params]
-    if MASS_PARAM in names:
-        return MASS_PARAM
-    return next((str(p.name) for p in params if getattr(p, "unit", None) == "kg"), None)
+    return next((str(p.name) for p in params if getattr(p, "is_mass", False)), None)
 
 
 def check_bin_param(env_id: str, param_name: str, params: Sequence[object]) -> None:
@@ -156,3 +154,13 @@ def check_bin_param(env_id: str, param_name: str, params: Sequence[object]) -> N
         f"--mass-bins draws {env_id}'s mass {mass} [kg] (episodes.csv: drawn_mass_kg), not "
         f"{param_name} ({what}); valid: --param {mass} with --mass-bins, or a grid of "
         f"{param_name} (--param-values)")
+
+
+def mass_info_key(env: object) -> str:
+    """Where ``env``'s ``info`` (and its reset options) name its mass: the parameter its task
+    declares ``is_mass`` (``Task.mass_param``), ``MASS_PARAM`` for an env without a task or
+    without a mass. ``impact-eval`` records it as ``drawn_mass_kg``; ``impact-collect`` hands
+    it to the expert."""
+    task = getattr(getattr(env, "unwrapped", env), "task", None)
+    params = tuple(getattr(task, "params", ()))
+    return mass_param_name(params) or MASS_PARAM

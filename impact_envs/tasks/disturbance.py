@@ -108,7 +108,7 @@ class DisturbanceTask(Task):
     scene_xml = "disturbance_scene.xml"
     object_bodies = ("trough",)
     params = (TaskParam("disturbance_n", 2.0, 0.0, 40.0, "N"),
-              TaskParam("object_mass", 0.3, 0.05, 5.0, "kg"),
+              TaskParam("object_mass", 0.3, 0.05, 5.0, "kg", is_mass=True),
               TaskParam("added_mass", 0.3, 0.0, 5.0, "kg"))
     max_episode_steps = 540
     workspace_low = np.array([0.15, -0.45, 0.0])

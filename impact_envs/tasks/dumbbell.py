@@ -38,7 +38,7 @@ class DumbbellTask(Task):
     env_entry_point = "impact_envs.envs.dumbbell:DumbbellEnv"
     scene_xml = "dumbbell_scene.xml"
     object_bodies = ("dumbbell",)
-    params = (TaskParam("object_mass", 2.5, 0.1, 12.0, "kg"),)
+    params = (TaskParam("object_mass", 2.5, 0.1, 12.0, "kg", is_mass=True),)
     observations = (*OBJECT_POSE, ObsEntry("goal_pos", 3, -2.0, 2.0, "m", "pad centre"))
     privileged_observations = ("object_pos", "object_rot6d", "goal_pos")
     max_episode_steps = 750

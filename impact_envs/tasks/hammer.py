@@ -37,7 +37,7 @@ class HammerTask(Task):
     env_entry_point = "impact_envs.envs.hammer:HammerEnv"
     scene_xml = "hammer_scene.xml"
     object_bodies = ("hammer",)
-    params = (TaskParam("object_mass", 0.2, 0.05, 12.0, "kg"),)
+    params = (TaskParam("object_mass", 0.2, 0.05, 12.0, "kg", is_mass=True),)
     observations = (*OBJECT_POSE, ObsEntry("goal_pos", 3, -2.0, 2.0, "m", "basket centre"))
     privileged_observations = ("object_pos", "object_rot6d", "goal_pos")
     max_episode_steps = 750

@@ -57,7 +57,7 @@ class HammerBasketTask(Task):
     env_entry_point = "impact_envs.envs.hammer_basket:HammerBasketEnv"
     scene_xml = "hammer_basket_scene.xml"
     object_bodies = ("hammer",)
-    params = (TaskParam("object_mass", 0.1, 0.05, 12.0, "kg"),)
+    params = (TaskParam("object_mass", 0.1, 0.05, 12.0, "kg", is_mass=True),)
     observations = (*OBJECT_POSE,
                     ObsEntry("object_origin_pos", 3, -2.0, 2.0, "m",
                              "hammer body origin (their grasp point), world frame"),
