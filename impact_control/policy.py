@@ -52,6 +52,20 @@ class FinishingPolicy(Policy, Protocol):
         ...
 
 
+@runtime_checkable
+class FrameReadingPolicy(Policy, Protocol):
+    """Optional hook: a camera policy that reads only some frames (a diffusion policy reads its
+    last ``n_obs_steps`` observations when it replans, every ``n_action_steps``). Before each
+    step ``impact_eval.rollout`` asks which envs' next observation it will read and tells the
+    other envs to skip rendering it (``ImpactEnv.skip_next_images``): the images then hold
+    zeros, which the policy never reads. Actions are the same, bit for bit, as with every
+    frame rendered (``tests/eval/test_frame_skipping.py``)."""
+
+    def frames_read_next(self) -> np.ndarray:
+        """``(B,)`` bool: whether env ``i``'s next observation's images will be read."""
+        ...
+
+
 def stack_obs(obs_list: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
     """Stack per-env Dict observations into one batched dict ``{key: (B, ...)}``."""
     return {k: np.stack([o[k] for o in obs_list]) for k in obs_list[0]}

@@ -59,6 +59,22 @@ def _placeholder_obs(env: object) -> dict[str, np.ndarray]:
     return {k: np.zeros(s.shape, dtype=s.dtype) for k, s in spaces.items()}
 
 
+def frames_unread(policy: object, n: int) -> np.ndarray:
+    """``(n,)`` bool: the envs whose next observation's images ``policy`` will not read
+    (``FrameReadingPolicy``; none for a policy without the hook)."""
+    reads = getattr(policy, "frames_read_next", None)
+    if reads is None:
+        return np.zeros(n, dtype=bool)
+    return ~np.asarray(reads(), dtype=bool)
+
+
+def skip_images(env: object) -> None:
+    """Tell ``env`` (an ``ImpactEnv`` under any wrappers) not to render its next images."""
+    skip = getattr(getattr(env, "unwrapped", env), "skip_next_images", None)
+    if skip is not None:
+        skip()
+
+
 def _crash_reason(exc: BaseException) -> str:
     """Failure reason of an exception raised inside an episode."""
     if isinstance(exc, SimulationError):
@@ -118,8 +134,11 @@ class LockstepBatch:
                     if not tracker.done:
                         self._finish(i, tracker, _crash_reason(exc), on_finish)
                 return
+            skip = frames_unread(self.policy, n)
             for i, tracker in enumerate(trackers):
                 if not tracker.done:
+                    if skip[i]:
+                        skip_images(self.envs[i])
                     obs[i] = self._step(i, actions[i], obs[i], tracker, on_finish)
 
     def _reset(

@@ -255,6 +255,8 @@ class ImpactEnv(gym.Env):
         self._step_count = 0
         self._success_once = False
         self._q_meas, self._dq_meas, _ = sim.read_sensors(rng)
+        if self._pixels is not None:
+            self._pixels.render_next()  # a reset's observation is always rendered
         return self._observation(), self._info(success=False, metrics=None)
 
     # -------------------------------------------------------------------- step
@@ -361,6 +363,8 @@ class ImpactEnv(gym.Env):
         info["contact_trace_dt_s"] = self.sim.dt
         info["supported_weight_n"] = self.task.supported_weight_n(self._episode_params)
         info["robot_profile"] = robot_profile(self)  # episodes.csv's robot_profile
+        if self._pixels is not None:
+            info["images_rendered"] = self._pixels.rendered
         info.update({k: float(v) for k, v in self._episode_params.items()})
         info.update(self.task.info(self.sim))
         return info
@@ -374,6 +378,13 @@ class ImpactEnv(gym.Env):
             self._renderer = make_renderer(self.sim.model, h, w)
         self._renderer.update_scene(self.sim.data, camera=self._camera)
         return self._renderer.render()
+
+    def skip_next_images(self) -> None:
+        """The next ``step``'s observation holds zero images instead of rendered ones, and its
+        ``info["images_rendered"]`` is False: for a reader that will not look at them
+        (``impact_control.policy.FrameReadingPolicy``). No effect in ``"state"`` mode."""
+        if self._pixels is not None:
+            self._pixels.skip_next()
 
     def close(self) -> None:
         if self._pixels is not None:

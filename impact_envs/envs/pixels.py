@@ -9,6 +9,11 @@ clipping plane (nothing in view reads as the far plane). Sites (markers such as 
 are not drawn. ``"rgb"`` and ``"rgbd"`` drop the task's privileged entries
 (``Task.privileged_observations``): the policy sees the cameras, the robot's own sensors and
 the task's commands only. ``"state"`` builds nothing here.
+
+A reader that will not look at the next observation's images (a diffusion policy between
+replans: ``Policy.frames_read_next``) may say so with ``ImpactEnv.skip_next_images``: that
+observation then holds zero images and ``info["images_rendered"]`` is False. ``reset`` always
+renders.
 """
 
 from __future__ import annotations
@@ -87,6 +92,9 @@ class PixelObservations:
         self._renderer: mujoco.Renderer | None = None
         self._option = mujoco.MjvOption()
         self._option.sitegroup[:] = 0  # sites are markers for people, not things a camera sees
+        self._skip = False
+        self.rendered = True
+        """Whether the latest observation's images were rendered (False: ``skip_next``)."""
 
     def _image_spaces(self) -> dict[str, spaces.Box]:
         h, w = self.size
@@ -97,6 +105,18 @@ class PixelObservations:
                 boxes[f"{camera}_depth"] = spaces.Box(0.0, self.far_m, (h, w, 1),
                                                       dtype=np.float32)
         return boxes
+
+    def skip_next(self) -> None:
+        """The next observation carries zero images instead of rendered ones (its reader
+        declared it will not look: ``Policy.frames_read_next``); the one after renders again."""
+        self._skip = True
+
+    def render_next(self) -> None:
+        """Undo ``skip_next``: the next observation is rendered."""
+        self._skip = False
+
+    def _blank(self) -> dict[str, np.ndarray]:
+        return {k: np.zeros(box.shape, box.dtype) for k, box in self._image_spaces().items()}
 
     def render(self, data: mujoco.MjData) -> dict[str, np.ndarray]:
         """One image per camera (and a depth image each in ``"rgbd"``) of ``data`` now."""
@@ -120,7 +140,9 @@ class PixelObservations:
                 data: mujoco.MjData) -> dict[str, np.ndarray]:
         """The image mode's observation: the kept state entries and this step's images, in
         the order of ``space``."""
-        obs = {**{k: state_obs[k] for k in self.state_keys}, **self.render(data)}
+        images = self._blank() if self._skip else self.render(data)
+        self.rendered, self._skip = not self._skip, False
+        obs = {**{k: state_obs[k] for k in self.state_keys}, **images}
         return {k: obs[k] for k in self.space.spaces}
 
     def close(self) -> None:

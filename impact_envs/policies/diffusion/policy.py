@@ -179,6 +179,15 @@ class DiffusionPolicy:
             actions[:, ACTION_POS] += np.asarray(obs["ee_pos"], dtype=np.float32)
         return actions
 
+    def frames_read_next(self) -> np.ndarray:
+        """``(n_envs,)`` bool: whether env ``i``'s next observation's images will be read
+        (``FrameReadingPolicy``): it will when a replan comes within ``n_obs_steps`` calls of
+        ``act``, for an env still running, in a visuomotor policy."""
+        if self.cfg.vision is None or not self.n_envs:
+            return np.zeros(self.n_envs, dtype=bool)
+        calls_to_replan = np.maximum(self.cfg.n_action_steps - self._queue_pos, 0)
+        return self._live & (calls_to_replan <= self.cfg.n_obs_steps - 1)
+
     def _flat_obs(self, obs: Mapping[str, np.ndarray]) -> torch.Tensor:
         missing = [k for k in self.cfg.obs_keys if k not in obs]
         if missing:
