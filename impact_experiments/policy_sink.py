@@ -6,8 +6,11 @@ Replays, one env at a time, the episodes of ``--method`` in the bins whose lower
 writes per episode what ``demo_sink.CarryProbe`` measures (clearance over the basket wall
 while crossing it carried, the TCP's lowest height there, a touch of the basket), plus the
 hammer's highest lift while the hand is closed (``max_lift_m``), the replay's success and the
-table's (``table_success``: a replay runs one env where the sweep batched several, so a
-chaotic episode may differ). ``--out`` is a new CSV, written episode by episode.
+table's (``table_success``). Each episode is seeded as the sweep's rollout seeds it (global
+RNGs, then the policy's per-episode noise, then the env), so a replay is the table's episode:
+the two successes agree unless an episode is chaotic. (Until 2026-12-02 the policy's noise was
+left unseeded, and the replays were other draws of the same episodes.) ``--out`` is a new
+CSV, written episode by episode.
 
     python -m impact_experiments.policy_sink --table results/hammer_basket_authors \\
         --method vanilla_dp_authors --bins 1.0 --out results/hammer_basket_diag/sink_va.csv
@@ -32,16 +35,21 @@ COLUMNS = ("method", "bin_lo", "seed", "episode", "mass_kg", "table_success", "s
 def replay(method: str, rows: pd.DataFrame):
     """Yield one output row per table row (replayed in order)."""
     import impact_envs  # noqa: F401 - registers the envs
-    from impact_control.policy import stack_obs
+    from impact_control.policy import SeededPolicy, stack_obs
     from impact_eval.envs import method_env
     from impact_eval.methods import resolve_method
+    from impact_eval.rollout import seed_global_rngs
 
     spec = resolve_method(method)
     env = method_env(ENV_ID, spec)
     policy = spec.build(ENV_ID, env)
     for r in rows.itertuples():
-        obs, info = env.reset(seed=int(r.seed), options={"object_mass": float(r.drawn_mass_kg)})
+        seed = int(r.seed)  # seeded as the sweep's rollout seeds an episode, in its order
+        seed_global_rngs(seed)
         policy.reset(1)
+        if isinstance(policy, SeededPolicy):
+            policy.seed_envs([seed])
+        obs, info = env.reset(seed=seed, options={"object_mass": float(r.drawn_mass_kg)})
         probe, done = CarryProbe(env), False
         while not done:
             action = np.asarray(policy.act(stack_obs([obs]))[0])
