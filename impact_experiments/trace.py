@@ -30,6 +30,7 @@ from impact_control.policy import stack_obs
 from impact_envs.cli import add_robot_set
 from impact_eval.envs import check_env_id, describe_env, make_env
 from impact_eval.methods import resolve_method
+from impact_eval.rollout import seed_global_rngs
 
 HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate  rel_s  hand_n"
 
@@ -47,10 +48,11 @@ def open_method(env_id: str, method: str, overrides: Sequence[str] = (),
 def start_episode(env, policy, value: float, seed: int) -> dict:
     """Reset ``env`` at the parameter ``value`` with the episode ``seed`` and the policy for
     one env, its sampling noise from the same seed (as impact-eval); the first observation."""
-    obs, _ = env.reset(seed=seed, options={describe_env(env).param_name: value})
+    seed_global_rngs(seed)  # in the rollout's order: global RNGs, policy, env
     policy.reset(1)
     if hasattr(policy, "seed_envs"):
         policy.seed_envs([seed])
+    obs, _ = env.reset(seed=seed, options={describe_env(env).param_name: value})
     return obs
 
 
