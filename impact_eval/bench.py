@@ -37,6 +37,7 @@ from impact_control.policy import stack_obs
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.envs.pixels import check_view
 from impact_envs.policies.experts import make_expert
+from impact_eval.bench_episode import episode_costs, print_episode_table
 from impact_eval.bench_pixels import pixel_costs, print_pixel_table
 
 
@@ -196,7 +197,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--pixels", action="store_true",
                         help="also print the pixel-observation cost per step and camera")
     parser.add_argument("--image-size", type=int, default=ObservationOptions().image_width,
-                        help="--pixels image width and height [px]")
+                        help="--pixels / --episode image width and height [px]")
+    parser.add_argument("--episode", action="store_true",
+                        help="also print a camera policy's episode cost: physics, controller, "
+                             "rendering, policy (bench_episode.py)")
+    parser.add_argument("--cameras", default=None,
+                        help="--episode cameras, comma list (default: the env's pixel default)")
+    parser.add_argument("--horizon", type=int, default=16, help="--episode: DP horizon")
+    parser.add_argument("--action-steps", type=int, default=8,
+                        help="--episode: DP actions executed per replan")
     args = parser.parse_args(argv)
     try:
         _check_args(args)
@@ -221,6 +230,14 @@ def main(argv: list[str] | None = None) -> None:
         costs = pixel_costs(args.env, args.steps, args.seed, args.mass, args.image_size,
                             args.repeat)
         print_pixel_table(costs, raw_step, args.image_size)
+    if args.episode:
+        cameras = (tuple(args.cameras.split(",")) if args.cameras
+                   else ObservationOptions().cameras)
+        costs = episode_costs(args.env, cameras, args.image_size, args.steps, args.seed,
+                              args.mass, args.repeat, (args.horizon, args.action_steps),
+                              rtf["raw"].wall_s / args.steps)
+        steps = gym.spec(args.env).max_episode_steps or args.steps
+        print_episode_table(costs, steps, args.image_size, cameras)
 
 
 if __name__ == "__main__":
