@@ -89,10 +89,12 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
     line instead of silently running another configuration.
     """
     extra: dict[str, object] = {}
-    resolved = resolve_preset(preset, overrides)  # name and config travel together
+    # A preset by its name (the env resolves it once, and run.json's env spec records the
+    # name); with overrides, the resolved Preset, its name "custom" travelling with it.
+    resolved = resolve_preset(preset, overrides)
     if env_id.split(":")[-1].startswith("IMPACT/"):
         extra["terminate_on_success"] = True
-        extra["controller_preset"] = resolved
+        extra["controller_preset"] = resolved if overrides else resolved.name
     elif overrides:  # an env of another namespace takes a name or a ControllerConfig
         extra["controller_preset"] = resolved.config
     elif preset != "default":

@@ -244,8 +244,12 @@ def test_camera_methods_make_their_envs_with_the_checkpoint_cameras():
 def test_the_sweep_passes_a_resolved_preset() -> None:
     from impact_eval.envs import make_env  # the sweep's env factory
 
+    from impact_eval.envs import describe_env
+
     env = make_env("IMPACT/Hammer-v1", "impact", preset="keep_carried")
     assert env.unwrapped.controller_preset == "keep_carried"
+    # run.json's env spec keeps the preset by name (serialisable, as before)
+    assert '"controller_preset": "keep_carried"' in describe_env(env).spec_json
     env.close()
     env = make_env("IMPACT/Hammer-v1", "impact", ["internal_model.learning_rate=0.02"],
                    preset="keep_carried")
