@@ -242,9 +242,10 @@ def test_camera_methods_make_their_envs_with_the_checkpoint_cameras():
 
 
 def test_the_sweep_passes_a_resolved_preset() -> None:
-    from impact_eval.envs import make_env  # the sweep's env factory
-
-    from impact_eval.envs import describe_env
+    from impact_eval.envs import (
+        describe_env,
+        make_env,  # the sweep's env factory
+    )
 
     env = make_env("IMPACT/Hammer-v1", "impact", preset="keep_carried")
     assert env.unwrapped.controller_preset == "keep_carried"
