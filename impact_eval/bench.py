@@ -36,6 +36,7 @@ from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_control.policy import stack_obs
 from impact_envs.envs.options import ObservationOptions
 from impact_envs.envs.pixels import check_view
+from impact_envs.policies.diffusion.config import DiffusionConfig
 from impact_envs.policies.experts import make_expert
 from impact_eval.bench_episode import episode_costs, print_episode_table
 from impact_eval.bench_pixels import pixel_costs, print_pixel_table
@@ -181,9 +182,20 @@ def _check_args(args: argparse.Namespace) -> None:
     try:
         env.unwrapped.task.mass_param().validate(args.mass)  # every bench env declares one
         size = args.image_size
-        check_view(env.unwrapped.sim.model, "--image-size", (), size, size)
+        cameras = episode_cameras(args)
+        check_view(env.unwrapped.sim.model, "--image-size", cameras, size, size)
+        if args.episode:  # the DP's shape: horizon and executed steps, as its config checks
+            DiffusionConfig(horizon=args.horizon, n_action_steps=args.action_steps)
     finally:
         env.close()
+
+
+def episode_cameras(args: argparse.Namespace) -> tuple[str, ...]:
+    """``--cameras`` of ``--episode`` (the pixel default when not given; none otherwise)."""
+    if not args.episode:
+        return ()
+    return (tuple(c.strip() for c in args.cameras.split(",")) if args.cameras
+            else ObservationOptions().cameras)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -231,8 +243,7 @@ def main(argv: list[str] | None = None) -> None:
                             args.repeat)
         print_pixel_table(costs, raw_step, args.image_size)
     if args.episode:
-        cameras = (tuple(args.cameras.split(",")) if args.cameras
-                   else ObservationOptions().cameras)
+        cameras = episode_cameras(args)
         costs = episode_costs(args.env, cameras, args.image_size, args.steps, args.seed,
                               args.mass, args.repeat, (args.horizon, args.action_steps),
                               rtf["raw"].wall_s / args.steps)
