@@ -239,11 +239,10 @@ def evaluate(
                         observation=options if options.uses_images else None)
     with temporary_method(method):
         plan = prepare(spec, run)
-        args = {"env": env_id, "method": name, "grid": grid, "mass_bins": mass_bins,
-                "param": param, "episodes": episodes, "out": str(out), "seed": seed,
-                "controller": controller, "controller_preset": controller_preset}
+        call = [f"policy={name}", f"controller={controller}",
+                f"controller_preset={controller_preset}"]
         if method.observation is not None:
-            args["observation"] = repr(method.observation)
-        execute(plan, command=[sys.argv[0], "impact_eval.evaluate"], args=args)
+            call.append(f"observation={method.observation!r}")
+        execute(plan, command=[sys.argv[0], "impact_eval.evaluate", *call])
     _raise_if_all_crashed(Path(out))
     return pd.read_csv(Path(out) / "episodes.csv", keep_default_na=False)

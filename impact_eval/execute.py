@@ -12,7 +12,6 @@ from impact_eval import runinfo
 from impact_eval.csvio import EpisodeLog
 from impact_eval.prepare import Plan
 from impact_eval.report import EPISODES_CSV, write_report
-from impact_eval.spec import SPEC_FORMAT
 from impact_eval.sweep import plan_tasks, run_sweep
 
 
@@ -26,26 +25,14 @@ class Result:
     plots: list[Path]
 
 
-def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict:
-    """Initial ``run.json`` content; earlier invocations of a resumed run are kept."""
+def _run_record(plan: Plan, command: list[str]) -> dict:
+    """Initial ``run.json`` content; earlier invocations of a resumed run are kept. The spec is
+    in it once, inside ``"identity"`` (``RunIdentity.to_json``, as identity.json)."""
     cfg = plan.config
-    spec = cfg.spec
     previous = plan.previous_run or {}
     return {
         "command": command,
-        "spec_format": SPEC_FORMAT,
-        "spec": spec.to_json(),
-        "args": {  # the invocation's own arguments, and the keys older readers look up
-            **{k: str(v) if isinstance(v, Path) else v for k, v in args.items()},
-            "env": spec.env_id,
-            "param_name": cfg.param_name,
-            "values": list(spec.values),
-            "bin_highs": list(spec.bin_highs),
-            "methods": list(spec.methods),
-            "controller_overrides": list(spec.controller_overrides),
-            "robot_overrides": list(spec.robot_overrides),
-            "method_controllers": plan.identity.method_controllers,
-        },
+        "identity": plan.identity.to_json(),
         "env": {
             "id": plan.env.env_id,
             "version": version_of(plan.env.env_id),
@@ -64,10 +51,11 @@ def _run_record(plan: Plan, command: list[str], args: dict[str, object]) -> dict
     }
 
 
-def execute(plan: Plan, command: list[str], args: dict[str, object]) -> Result:
-    """Run the plan; ``run.json`` records each invocation's wall time and outcome."""
+def execute(plan: Plan, command: list[str]) -> Result:
+    """Run the plan; ``run.json`` records each invocation's wall time and outcome
+    (``command``: the invocation as given, an ``impact-eval`` argv or an ``evaluate`` call)."""
     plan.out.mkdir(parents=True, exist_ok=True)
-    record = _run_record(plan, command, args)
+    record = _run_record(plan, command)
     invocation = {
         "started_utc": runinfo.utc_now(),
         "resume": bool(plan.done),

@@ -218,10 +218,8 @@ def prepare(spec: SweepSpec, options: RunOptions) -> Plan:
     continuing = options.resume or options.extend
     previous = runinfo.read_run_json(options.out) if continuing else None
     identity = runinfo.RunIdentity(
-        env=spec.env_id, seed=spec.seed, param_name=info.param_name,
-        controller_overrides=spec.controller_overrides, robot_overrides=spec.robot_overrides,
-        methods=spec.methods, values=spec.values, episodes=spec.episodes,
-        method_controllers={m.name: m.settings for m in methods}, bin_highs=spec.bin_highs,
+        spec=spec, param_name=info.param_name,
+        method_controllers={m.name: m.settings for m in methods},
         policy_fingerprints=_fingerprints(methods, info.env_id))
     if continuing:
         check_same_code(previous, runinfo.git_state(), options.allow_code_change)

@@ -58,6 +58,7 @@ from impact_eval.reproduce_manifest import (
     sha256,
     table_entry,
 )
+from impact_eval.run_migration import spec_json_of
 from impact_eval.runinfo import IDENTITY_JSON, RUN_JSON, package_versions
 from impact_eval.sweep_command import _Parser, run_sweep_command
 
@@ -65,11 +66,12 @@ RESULTS = Path(__file__).resolve().parent.parent / "results"
 PROG = "impact-eval reproduce"
 
 
-def parse_cells(spec: str, args: dict) -> set[Cell]:
-    """``method@value,...`` -> cells, each checked against the table's methods and grid; an
-    empty spec or item is refused (it would otherwise rerun the whole table)."""
-    methods = list(args["methods"])
-    values = {format_value(float(v)) for v in args["values"]}
+def parse_cells(spec: str, sweep: dict) -> set[Cell]:
+    """``method@value,...`` -> cells, each checked against the table's methods and grid
+    (``sweep``: its spec, ``SweepSpec.to_json``'s keys); an empty spec or item is refused (it
+    would otherwise rerun the whole table)."""
+    methods = list(sweep["methods"])
+    values = {format_value(float(v)) for v in sweep["values"]}
     valid = (f"METHOD@VALUE,... with METHOD in {', '.join(methods)} and VALUE in "
              f"{', '.join(sorted(values, key=float))}")
     items = [item.strip() for item in spec.split(",")]
@@ -235,7 +237,7 @@ def _open_all(a: argparse.Namespace) -> list[tuple[Table, set[Cell] | None]]:
         check_out_dir(a.out)  # creatable and writable, probed without residue
     manifest = load_manifest(a.results)
     opened = [open_table(a.results, manifest, name) for name in tables]
-    return [(t, None if a.cells is None else parse_cells(a.cells, t.run["args"]))
+    return [(t, None if a.cells is None else parse_cells(a.cells, spec_json_of(t.run)))
             for t in opened]
 
 

@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 from impact_control.errors import InvalidArgumentError
 from impact_eval.csvio import read_rows
+from impact_eval.run_migration import spec_json_of
 from impact_eval.runinfo import RUN_JSON, read_run_json
 from impact_eval.spec import SweepSpec
 
@@ -57,24 +58,8 @@ def sha256(path: Path) -> str:
 
 def sweep_argv(run: dict) -> list[str]:
     """The impact-eval arguments that define a table's rows (no output or executor options):
-    from run.json's ``"spec"`` (``SweepSpec.to_argv``), or for a run recorded before it from
-    its ``"args"``."""
-    if "spec" in run:
-        return SweepSpec.from_json(run["spec"]).to_argv()
-    args = run["args"]
-    values = (["--mass-bins", args["mass_bins"]] if args.get("mass_bins")
-              else ["--param-values", args["grid"]])
-    argv = ["--env", args["env"], "--method", ",".join(args["methods"]), *values,
-            "--episodes", str(args["episodes"]), "--seed", str(args["seed"])]
-    if args.get("param"):
-        argv += ["--param", args["param"]]
-    for override in args.get("controller_overrides") or ():
-        argv += ["--controller-set", override]
-    for override in args.get("robot_overrides") or ():
-        argv += ["--robot-set", override]
-    if args.get("beyond_hardware_limits"):
-        argv.append("--beyond-hardware-limits")
-    return argv
+    ``SweepSpec.to_argv`` of the spec its run.json recorded, in any layout (``run_migration``)."""
+    return SweepSpec.from_json(spec_json_of(run)).to_argv()
 
 
 def load_manifest(results: Path, must_exist: bool = True) -> dict:
@@ -138,22 +123,26 @@ def table_entry(manifest: dict, table: str, results: Path) -> dict:
 
 
 def read_table_run(directory: Path) -> dict:
-    """The table's ``run.json`` with the ``args`` that ``--cells`` and ``--record`` read."""
+    """The table's ``run.json``, its spec checked for what ``--cells`` and ``--record`` read
+    (the methods and values)."""
     if not directory.is_dir():
         raise InvalidArgumentError(f"the table directory {directory} does not exist; restore it "
                                    "(git checkout) or choose another table (--list)")
     run = read_run_json(directory)  # a corrupt or truncated one: one-line error
     if run is None:
         raise InvalidArgumentError(f"{directory} has no {RUN_JSON}; restore it (git checkout)")
-    args = run.get("args")
-    problem = ("no 'args' object" if not isinstance(args, dict) else
-               "'args.methods' is not a list of names" if not (
-                   isinstance(args.get("methods"), list)
-                   and all(isinstance(m, str) for m in args["methods"])) else
-               "'args.values' is not a list of numbers" if not (
-                   isinstance(args.get("values"), list) and all(
+    try:
+        spec = spec_json_of(run, str(directory / RUN_JSON))
+    except (KeyError, TypeError) as exc:
+        raise InvalidArgumentError(f"{directory / RUN_JSON} is damaged (spec: {exc}); "
+                                   "restore it") from None
+    problem = ("'methods' is not a list of names" if not (
+                   isinstance(spec.get("methods"), list)
+                   and all(isinstance(m, str) for m in spec["methods"])) else
+               "'values' is not a list of numbers" if not (
+                   isinstance(spec.get("values"), list) and all(
                        isinstance(v, int | float) and not isinstance(v, bool)
-                       for v in args["values"])) else None)
+                       for v in spec["values"])) else None)
     if problem:
         raise InvalidArgumentError(f"{directory / RUN_JSON} is damaged ({problem}); restore it")
     return run
@@ -202,7 +191,7 @@ def record(results: Path, tables: Sequence[str]) -> dict:
         try:
             sweep_args = sweep_argv(run)
         except (KeyError, TypeError) as exc:
-            raise InvalidArgumentError(f"{directory / RUN_JSON} is damaged (args: {exc})") from None
+            raise InvalidArgumentError(f"{directory / RUN_JSON} is damaged (spec: {exc})") from None
         host = run.get("host") if isinstance(run.get("host"), dict) else {}
         manifest["tables"][table] = {
             "dir": table, "sweep_args": sweep_args, "command": run.get("command"),

@@ -12,7 +12,10 @@ from pathlib import Path
 from impact_control.errors import InvalidArgumentError
 from impact_control.runinfo import host_info, utc_now  # noqa: F401 - run.json fields, re-exported
 from impact_control.runinfo import package_versions as control_package_versions
+from impact_eval.cli_options import declared
 from impact_eval.code_check import check_fingerprints
+from impact_eval.run_migration import SPEC_FORMAT, identity_of
+from impact_eval.spec import SweepSpec
 
 RUN_JSON = "run.json"
 IDENTITY_JSON = "identity.json"
@@ -87,24 +90,17 @@ def read_run_json(out_dir: Path) -> dict | None:
 
 
 def recorded_identity(out_dir: Path) -> dict | None:
-    """The identity a run in ``out_dir`` recorded: ``identity.json``, else run.json's
-    arguments (runs from before the sidecar), else ``None``."""
-    sidecar = _read_object(out_dir / IDENTITY_JSON)
-    if sidecar is not None:
-        return sidecar
-    run = read_run_json(out_dir)
-    args = run.get("args") if run else None
-    if isinstance(args, dict) and all(k in args for k in REQUIRED_KEYS):
-        return args
-    return None
+    """The identity a run in ``out_dir`` recorded, in the current layout
+    (``run_migration.identity_of``): ``identity.json``, else run.json's, else ``None``."""
+    identity = identity_of(_read_object(out_dir / IDENTITY_JSON))
+    return identity if identity is not None else identity_of(read_run_json(out_dir))
 
 
 def write_identity(out_dir: Path, identity: RunIdentity) -> None:
     """Write ``identity.json`` atomically (before the first row of the run)."""
     path = out_dir / IDENTITY_JSON
     tmp = path.with_name(path.name + ".tmp")
-    data = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(identity).items()}
-    tmp.write_text(json.dumps(data, indent=2) + "\n")
+    tmp.write_text(json.dumps(identity.to_json(), indent=2) + "\n")
     os.replace(tmp, path)
 
 
@@ -118,41 +114,33 @@ def write_run_json(out_dir: Path, data: dict) -> None:
 
 @dataclass(frozen=True)
 class RunIdentity:
-    """What makes the cells of a sweep comparable; ``--resume`` must not change any of it."""
+    """What makes the cells of a sweep comparable; ``--resume`` must not change any of it: the
+    spec, and what ``prepare`` resolved from the env and the methods."""
 
-    env: str
-    seed: int
+    spec: SweepSpec
     param_name: str
-    controller_overrides: tuple[str, ...]
-    methods: tuple[str, ...]
-    values: tuple[float, ...]
-    episodes: int
+    """The swept parameter, resolved (``spec.param`` or the env's first)."""
     method_controllers: dict[str, dict[str, object]] = field(default_factory=dict)
     """Per method: env controller, preset and warm start (a name that now means another
     controller cannot resume the earlier rows)."""
-    bin_highs: tuple[float, ...] = ()
-    """``--mass-bins``: each bin's upper edge (``values``: their lower edges); empty: a grid."""
     policy_fingerprints: dict[str, str | None] = field(default_factory=dict)
     """Per method: sha256 of the checkpoint it loads (``checkpoints.fingerprint``; None:
     none, e.g. a scripted expert)."""
-    robot_overrides: tuple[str, ...] = ()
-    """``--robot-set``; a run recorded before the option existed had none."""
 
-
-_EXTENDABLE = ("methods", "values", "bin_highs")
-_ADDED_LATER: dict[str, list] = {"robot_overrides": []}
-"""Identity keys that runs recorded before them lack, with the value those runs had."""
-_CHECKED_APART = ("method_controllers", "policy_fingerprints")
-"""Identity keys compared per method (``_check_controllers``, ``check_fingerprints``)."""
-REQUIRED_KEYS = ("env", "seed", "methods", "values", "episodes")
-"""Keys without which a recorded identity cannot be checked (then ``--resume`` refuses)."""
+    def to_json(self) -> dict[str, object]:
+        """identity.json and run.json's ``"identity"`` (``run_migration.identity_of`` reads
+        every earlier layout into this one)."""
+        return {"spec_format": SPEC_FORMAT, "spec": self.spec.to_json(),
+                "param_name": self.param_name, "method_controllers": self.method_controllers,
+                "policy_fingerprints": self.policy_fingerprints}
 
 
 def check_resumable(recorded: dict | None, now: RunIdentity, extend: bool = False,
                     has_rows: bool = False) -> None:
     """Refuse ``--resume`` into a run whose recorded identity differs from ``now``.
 
-    ``recorded`` is ``recorded_identity(out)``. With ``extend``, methods and values may grow
+    ``recorded`` is ``recorded_identity(out)``. Each spec field is compared as its declaration
+    says (``cli_options.option``'s ``resume``); with ``extend``, methods and values may grow
     (every earlier method kept; new values appended after the earlier ones, whose positions
     fix the episode seeds): new cells get the same episode count, so no cell ends with a
     different count. Rows without any recorded identity are refused (``has_rows``).
@@ -166,32 +154,41 @@ def check_resumable(recorded: dict | None, now: RunIdentity, extend: bool = Fals
         return
     _check_controllers(recorded.get("method_controllers"), now.method_controllers)
     check_fingerprints(recorded.get("policy_fingerprints"), now.policy_fingerprints)
-    args = recorded
-    for key, value in asdict(now).items():
-        if key in _CHECKED_APART or (key not in args and key not in _ADDED_LATER):
-            continue
-        was = args.get(key, _ADDED_LATER.get(key))
-        now_list = list(value) if isinstance(value, tuple) else value
-        growable = key in _EXTENDABLE
-        if was == now_list or (growable and set(was) == set(now_list)):
-            continue
-        if extend and key == "methods":
-            missing = [v for v in was if v not in now_list]
-            if not missing:
-                continue
-            raise InvalidArgumentError(
-                f"cannot extend: methods {missing} of the run are missing; --extend keeps "
-                f"every earlier method (run.json: {was!r})")
-        if extend and key in ("values", "bin_highs"):
-            if now_list[:len(was)] == was:
-                continue
-            raise InvalidArgumentError(
-                f"cannot extend: the grid must start with the run's values {was!r} (an "
-                "episode's seed follows its value's position); append new values after them")
-        hint = "; to add methods or grid values pass --extend" if growable else ""
+    was_spec = recorded.get("spec") or {}
+    for f, opt in declared(SweepSpec):
+        if opt.resume != "free":
+            was = was_spec.get(f.name, _listed(f.default))
+            _check_same(f.name, was, _listed(getattr(now.spec, f.name)),
+                        opt.resume == "grow", extend)
+    if "param_name" in recorded:
+        _check_same("param_name", recorded["param_name"], now.param_name, False, extend)
+
+
+def _listed(value: object) -> object:
+    return list(value) if isinstance(value, tuple) else value
+
+
+def _check_same(key: str, was: object, now: object, growable: bool, extend: bool) -> None:
+    """One recorded value against the new one (``check_resumable``)."""
+    if was == now or (growable and set(was) == set(now)):  # type: ignore[arg-type]
+        return
+    if extend and key == "methods":
+        missing = [v for v in was if v not in now]  # type: ignore[attr-defined]
+        if not missing:
+            return
         raise InvalidArgumentError(
-            f"cannot resume: {key} was {was!r} in run.json, now {now_list!r}; use the same "
-            f"value (every cell keeps one episode count) or another --out{hint}")
+            f"cannot extend: methods {missing} of the run are missing; --extend keeps "
+            f"every earlier method (run.json: {was!r})")
+    if extend and growable:
+        if now[:len(was)] == was:  # type: ignore[index, arg-type]
+            return
+        raise InvalidArgumentError(
+            f"cannot extend: the grid must start with the run's values {was!r} (an "
+            "episode's seed follows its value's position); append new values after them")
+    hint = "; to add methods or grid values pass --extend" if growable else ""
+    raise InvalidArgumentError(
+        f"cannot resume: {key} was {was!r} in run.json, now {now!r}; use the same "
+        f"value (every cell keeps one episode count) or another --out{hint}")
 
 
 def _with_later_robot_fields(setting: object) -> object:

@@ -66,14 +66,13 @@ def test_make_env_applies_overrides_and_resume_refuses_other_overrides() -> None
     plain = make_env("IMPACT/Hammer-v1", "impact")
     assert plain.unwrapped.controller.config == ControllerConfig()
     plain.close()
-    previous = {
-        "env": "IMPACT/Hammer-v1",
-        "seed": 0,
-        "param_name": "object_mass",
-        "controller_overrides": [],
-    }
-    same = RunIdentity("IMPACT/Hammer-v1", 0, "object_mass", (), ("impact",), (1.0,), 5)
+    from impact_eval.spec import SweepSpec
+
+    same = RunIdentity(SweepSpec("IMPACT/Hammer-v1", ("impact",), (1.0,), episodes=5),
+                       "object_mass")
+    previous = same.to_json()
     check_resumable(previous, same)
     with pytest.raises(InvalidArgumentError, match="controller_overrides"):
         other = ("slow_wrench.clip_force_n=5",)
-        check_resumable(previous, replace(same, controller_overrides=other))
+        check_resumable(previous, replace(same, spec=replace(same.spec,
+                                                             controller_overrides=other)))

@@ -32,7 +32,8 @@ def test_evaluate_writes_the_cli_files_and_returns_the_episodes(tmp_path):
     on_disk = pd.read_csv(tmp_path / "run" / "episodes.csv", keep_default_na=False)
     pd.testing.assert_frame_equal(table, on_disk)
     assert (tmp_path / "run" / "summary.csv").is_file()
-    assert json.loads((tmp_path / "run" / "run.json").read_text())["args"]["method"] == "const"
+    run = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert run["identity"]["spec"]["methods"] == ["const"] and "policy=const" in run["command"]
     again = impact_eval.evaluate(_Constant(), ENV_ID, [0.5, 2.0], tmp_path / "run", episodes=3,
                                  controller="impedance", name="const", resume=True)
     pd.testing.assert_frame_equal(again, table)  # nothing left to run, same rows

@@ -119,7 +119,7 @@ def test_the_ray_executor_writes_the_same_bytes(ray_local, reference: Path,
 
 def test_run_json_records_the_carry_and_the_robot(reference: Path) -> None:
     run = json.loads((reference.parent / "run.json").read_text())
-    settings = run["args"]["method_controllers"]
+    settings = run["identity"]["method_controllers"]
     assert settings[CARRIED]["carry"] is True
     assert settings[CARRIED]["robot"]["torque_reading"] == "commanded"
     assert "carry" not in settings[FRESH]  # absent: not carried (older runs' records match)
@@ -151,7 +151,7 @@ def test_a_run_recorded_before_the_realism_fields_resumes(reference: Path, tmp_p
     _interrupted(reference, out, {0})
     for name in ("identity.json", "run.json"):
         record = json.loads((out / name).read_text())
-        settings = record.get("method_controllers") or record["args"]["method_controllers"]
+        settings = record.get("method_controllers") or record["identity"]["method_controllers"]
         for field in LATER_ROBOT_FIELDS:
             del settings[CARRIED]["robot"][field]
         (out / name).write_text(json.dumps(record))

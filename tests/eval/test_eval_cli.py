@@ -171,5 +171,6 @@ def test_beyond_hardware_limits_flag_allows_and_records_it(tmp_path: Path) -> No
     assert not out.exists()
     assert main([*args, "--beyond-hardware-limits"]) == 0
     run = json.loads((out / "run.json").read_text())
-    assert run["args"]["beyond_hardware_limits"] is True
-    assert run["args"]["controller_set"] == ["limits.torque_rate_max_nm_per_s=2000"]
+    assert run["identity"]["spec"]["beyond_hardware_limits"] is True
+    assert run["identity"]["spec"]["controller_overrides"] == [
+        "limits.torque_rate_max_nm_per_s=2000"]

@@ -125,7 +125,7 @@ def test_resume_refuses_changes_with_run_json_gone(
     (out / "run.json").unlink()
     assert main([*sweep_args(out, "--workers", "1"), "--resume", *change]) == 2
     assert "cannot resume" in capsys.readouterr().err
-    assert json.loads((out / "identity.json").read_text())["controller_overrides"] == []
+    assert json.loads((out / "identity.json").read_text())["spec"]["controller_overrides"] == []
 
 
 def test_a_zero_byte_csv_is_a_fresh_start(finished: Path, tmp_path: Path) -> None:

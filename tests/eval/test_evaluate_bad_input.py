@@ -106,7 +106,7 @@ def test_resume_refuses_another_controller_even_without_run_json(tmp_path: Path)
             (out / "run.json").unlink()
         with pytest.raises(InvalidArgumentError, match="ran with .*impact.* would now run"):
             evaluate(**GOOD, out=out, controller="impedance", resume=True)
-    assert json.loads((out / "identity.json").read_text())["episodes"] == 2
+    assert json.loads((out / "identity.json").read_text())["spec"]["episodes"] == 2
     with pytest.raises(InvalidArgumentError, match="episodes was 2"):
         evaluate(**{**GOOD, "episodes": 3}, out=out, resume=True)
     table = evaluate(**GOOD, out=out, controller="impact", resume=True)

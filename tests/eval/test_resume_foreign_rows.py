@@ -99,7 +99,7 @@ def test_rows_drawn_in_the_old_bin_are_not_relabelled(tmp_path: Path, capsys, bi
     assert main(_args(out, values=("--mass-bins", "0.5-1.5,1.5-4"))) == 0
     (out / "identity.json").unlink()
     run = json.loads((out / "run.json").read_text())
-    run["args"]["bin_highs"] = edited
+    run["identity"]["spec"]["bin_highs"] = edited
     (out / "run.json").write_text(json.dumps(run))
     err = _refused(out, _args(out, "--resume", values=("--mass-bins", bins)), capsys)
     assert f"is not the mass bin [1.5, {edited[1]!r}) draws from its seed" in err

@@ -34,8 +34,7 @@ def test_the_robot_reaches_every_row_and_run_json(tmp_path: Path, capsys) -> Non
     rows = pd.read_csv(out / "episodes.csv")
     assert set(rows["robot_profile"]) == {"fr3"} and len(rows) == 4
     run = json.loads((out / "run.json").read_text())
-    assert run["args"]["robot_overrides"] == ["realism=fr3", "delay_ticks=0"]
-    assert run["spec"]["robot_overrides"] == ["realism=fr3", "delay_ticks=0"]
+    assert run["identity"]["spec"]["robot_overrides"] == ["realism=fr3", "delay_ticks=0"]
     assert sweep_argv(run)[-4:] == ["--robot-set", "realism=fr3", "--robot-set",
                                      "delay_ticks=0"]  # what reproduce reruns
     assert main(_args(out, "--robot-set", "realism=fr3", "--robot-set", "delay_ticks=0",
@@ -52,8 +51,12 @@ def test_a_run_from_before_the_option_resumes_only_on_the_ideal_robot(tmp_path: 
     assert main(_args(out)) == 0
     identity = out / "identity.json"
     recorded = json.loads(identity.read_text())
-    del recorded["robot_overrides"]  # as written before --robot-set existed
-    identity.write_text(json.dumps(recorded))
+    spec = recorded["spec"]  # the flat layout written before --robot-set existed
+    flat = {"env": spec["env_id"], "seed": spec["seed"], "param_name": recorded["param_name"],
+            "controller_overrides": [], "methods": spec["methods"], "values": spec["values"],
+            "episodes": spec["episodes"], "method_controllers": recorded["method_controllers"],
+            "bin_highs": [], "policy_fingerprints": recorded["policy_fingerprints"]}
+    identity.write_text(json.dumps(flat))
     assert main(_args(out, "--resume")) == 0
     capsys.readouterr()
     assert _exit_code(_args(out, "--robot-set", "realism=fr3", "--resume")) == 2

@@ -74,10 +74,10 @@ def test_cli_and_evaluate_record_the_same_spec(tmp_path: Path) -> None:
     evaluate(FakePolicy(0.9), ENV_ID, [0.5, 3], api, episodes=2, name="mine",
              envs_per_worker=2)
     recorded = json.loads((api / "run.json").read_text())
-    assert recorded["spec_format"] == 1
-    spec = SweepSpec.from_json(recorded["spec"])
+    assert recorded["identity"]["spec_format"] == 2 and "spec" not in recorded
+    spec = SweepSpec.from_json(recorded["identity"]["spec"])
     assert spec == SweepSpec(env_id=ENV_ID, methods=("mine",), values=(0.5, 3.0), episodes=2)
     assert sweep_argv(recorded) == spec.to_argv()
     assert recorded["run_options"]["envs_per_worker"] == 2
-    from_cli = SweepSpec.from_json(json.loads((cli / "run.json").read_text())["spec"])
+    from_cli = SweepSpec.from_json(json.loads((cli / "run.json").read_text())["identity"]["spec"])
     assert from_cli == SweepSpec.from_json({**spec.to_json(), "methods": ["fake_fast"]})

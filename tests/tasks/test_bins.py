@@ -148,9 +148,11 @@ def test_reproduce_reruns_a_bin_table_from_its_recorded_bins(tmp_path: Path) -> 
     run = json.loads((tmp_path / "run" / "run.json").read_text())
     argv = sweep_argv(run)
     assert argv[argv.index("--mass-bins") + 1] == "0.5-1.5,1.5-4.0"  # the spec's own text
-    assert "--param-values" not in argv and run["spec"]["bin_highs"] == [1.5, 4.0]
-    legacy = sweep_argv({"args": run["args"]})  # a run.json from before the spec
-    assert legacy[legacy.index("--mass-bins") + 1] == "0.5-1.5,1.5-4"
+    spec = run["identity"]["spec"]
+    assert "--param-values" not in argv and spec["bin_highs"] == [1.5, 4.0]
+    flat = {"env": spec["env_id"], "methods": spec["methods"], "values": spec["values"],
+            "bin_highs": spec["bin_highs"], "episodes": spec["episodes"], "seed": spec["seed"]}
+    assert sweep_argv({"args": flat}) == argv  # a run.json from before the spec (run_migration)
     assert main([*argv, "--workers", "1", "--envs-per-worker", "2",
                  "--out", str(tmp_path / "again")]) == 0
     assert ((tmp_path / "again" / "episodes.csv").read_bytes()
