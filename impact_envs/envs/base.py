@@ -242,7 +242,10 @@ class ImpactEnv(gym.Env):
         q0 = self.task.initialize_episode(sim, rng)
         sim.reset_robot(q0, 0.04, rng)
         mujoco.mj_forward(sim.model, sim.data)
-        self.controller.reset(q0, keep_internal_model=self.persist_internal_model)
+        # the env ticks through its closed loop's own compiled kernel, not ``compute``: no
+        # entry of ``compute`` is resolved (on a fresh machine, a compile per controller shape)
+        self.controller.reset(q0, keep_internal_model=self.persist_internal_model,
+                              resolve_tick=False)
         carry, self._carry = self._carry, None
         if carry is not None:
             apply_carry(self, carry)
