@@ -75,11 +75,11 @@ class RobotOptions:
             docs/sensing.md "Realism profiles"): ``"ideal"`` (default; every result before
             issue 39, bit for bit) or ``"fr3"`` (an averaged dynamics model, drifting
             torque-sensor offsets, a one-tick delay, quantized encoders).
-        tau_offset_std_nm, tau_offset_drift_nm_per_sqrt_s, model_link_mass_std,
-        model_com_std_m, model_inertia_std, model_seed, delay_ticks, command_loss_rate,
-        encoder_step_rad: One field of the profile each (``Realism``'s attributes give
-            units and meaning); None (default): the profile's value. An explicit value
-            overrides the profile.
+        tau_offset_std_nm: One field of the profile (``Realism``'s attributes give units and
+            meaning), as are the eight fields after it: ``tau_offset_drift_nm_per_sqrt_s``,
+            ``model_link_mass_std``, ``model_com_std_m``, ``model_inertia_std``,
+            ``model_seed``, ``delay_ticks``, ``command_loss_rate`` and ``encoder_step_rad``.
+            None (default): the profile's value; an explicit value overrides the profile.
     """
 
     sensor_noise: bool = True

@@ -1,0 +1,31 @@
+"""The documentation site builds in strict mode (issue 58): warnings are errors, so a broken
+link, a figure under ``results/`` that a page links but that is missing, or an API object
+that no longer exists fails here (``mkdocs.yml``; the ``docs`` extra, in ``dev``)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_the_site_builds_strictly(tmp_path: Path) -> None:
+    pytest.importorskip("mkdocs", reason="the docs extra is not installed")
+    env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
+    done = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-d",
+                           str(tmp_path / "site")], cwd=REPO, env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    site = tmp_path / "site"
+    for page in ("index.html", "results/index.html", "api/eval/index.html",
+                 "api/envs/index.html", "_results/hammer_basket/plots/authors_figure.png"):
+        assert (site / page).is_file(), page
+    api = (site / "api" / "eval" / "index.html").read_text()
+    assert "evaluate" in api and "SweepSpec" in api  # rendered from the docstrings
+    start = (site / "index.html").read_text()
+    assert "pip install torch==2.13.0" in start  # the README's commands, one source
