@@ -1,7 +1,7 @@
 """Frame strips of every task for docs/gallery.md: the scripted expert's episode under IMPACT,
 four frames each (start, grasp or contact, mid-task, end), from the ``overview`` camera.
 
-    MUJOCO_GL=egl python -m impact_experiments.frames --out docs/img
+    MUJOCO_GL=egl python -m impact_experiments.frames --out docs/img [--env IMPACT/HammerBasket-v1]
 """
 
 from __future__ import annotations
@@ -62,9 +62,11 @@ def save_strip(env_id: str, out: Path) -> Path:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("docs/img"))
+    parser.add_argument("--env", action="append", choices=impact_envs.ENV_IDS, default=None,
+                        help="only this env (repeatable; default: every registered env)")
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
-    for env_id in impact_envs.ENV_IDS:
+    for env_id in args.env or impact_envs.ENV_IDS:
         print(save_strip(env_id, args.out))
 
 

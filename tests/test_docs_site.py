@@ -23,9 +23,12 @@ def test_the_site_builds_strictly(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr[-3000:]
     site = tmp_path / "site"
     for page in ("index.html", "results/index.html", "api/eval/index.html",
-                 "api/envs/index.html", "_results/hammer_basket/plots/authors_figure.png"):
+                 "api/envs/index.html", "_results/hammer_basket/plots/authors_figure.png",
+                 "environments/hammer_basket/index.html"):
         assert (site / page).is_file(), page
     api = (site / "api" / "eval" / "index.html").read_text()
     assert "evaluate" in api and "SweepSpec" in api  # rendered from the docstrings
+    env_page = (site / "environments" / "hammer" / "index.html").read_text()
+    assert "Observation space" in env_page and "Version history" in env_page  # the docstring
     start = (site / "index.html").read_text()
     assert "pip install torch==2.13.0" in start  # the README's commands, one source
