@@ -1,8 +1,8 @@
-"""The command blocks a new user copies from README.md and docs/eval.md run and do what their
-comments say. Each fenced ``bash``/``python`` block is classified below: run as written, run
-after documented substitutions (fragments made runnable, long sweeps made short), or skipped
-with the reason docs/eval.md ("Command blocks under test") lists. A block added to either file
-without a classification fails ``test_every_block_is_classified``.
+"""The command blocks a new user copies from README.md, docs/index.md and docs/eval.md run and
+do what their comments say. Each fenced ``bash``/``python`` block is classified below: run as
+written, run after documented substitutions (fragments made runnable, long sweeps made short),
+or skipped with the reason docs/eval.md ("Command blocks under test") lists. A block added to
+any of these files without a classification fails ``test_every_block_is_classified``.
 
 Blocks run in a fresh interpreter in a temporary folder (relative ``results/...`` paths land
 there), with ``MUJOCO_GL``, ``DISPLAY`` and ``WAYLAND_DISPLAY`` unset, as on a fresh machine
@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-DOCS = ("README.md", "docs/eval.md")
+DOCS = ("README.md", "docs/index.md", "docs/eval.md")
 FENCE = re.compile(r"^```(bash|python)\n(.*?)^```", re.S | re.M)
 
 
