@@ -28,16 +28,18 @@ RESUME_RULES = ("same", "grow", "free")
 
 @dataclass(frozen=True)
 class Value:
-    """``--flag VALUE``: one value, parsed by ``parse`` (text -> field value; its errors are
-    the one-line ``InvalidArgumentError`` s of the field's own checks)."""
+    """``--flag VALUE``: one value, converted by argparse's ``type`` (``int``: ``--episodes x``
+    is argparse's one-line error) and then by ``parse`` where the field needs more (the method
+    list; its errors are the field's own one-line ``InvalidArgumentError`` s)."""
 
     flag: str
     help: str | Callable[[], str]
-    parse: Callable[[Any], Any] = str
+    parse: Callable[[Any], Any] | None = None
+    """None: the value as argparse gave it."""
     show: Callable[[Any], str] = str
     metavar: str | None = None
     type: Callable[[str], Any] | None = None
-    """argparse's own conversion (``int``: ``--episodes x`` is argparse's one-line error)."""
+    """argparse's own conversion (None: the text)."""
     cli_default: Any = None
     """The parser's default where it differs from the field's (None: absent)."""
 
@@ -118,8 +120,10 @@ def from_namespace(cls: type, namespace: argparse.Namespace) -> dict[str, Any]:
         if given is None or given is False:
             continue
         form = opt.form
-        out[f.name] = (form.parse(given) if isinstance(form, Value) else
-                       tuple(given) if isinstance(form, Repeated) else True)
+        if isinstance(form, Value):
+            out[f.name] = given if form.parse is None else form.parse(given)
+        else:
+            out[f.name] = tuple(given) if isinstance(form, Repeated) else True
     return out
 
 

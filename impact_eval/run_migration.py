@@ -44,19 +44,32 @@ def spec_of_flat(flat: dict) -> dict:
 
 def identity_of(record: dict | None) -> dict | None:
     """The identity (current layout, ``RunIdentity.to_json``) in ``record``: an identity.json
-    or a run.json of any layout; ``None`` when it holds none (a run.json without arguments)."""
+    or a run.json of any layout; ``None`` when it holds none (a run.json without arguments).
+    A record whose spec cannot be read is one line (``InvalidArgumentError``)."""
     if record is None:
         return None
     if "identity" in record and isinstance(record["identity"], dict):  # a current run.json
-        return record["identity"]
+        return _checked(record["identity"])
     if record.get("spec_format") == SPEC_FORMAT and "spec" in record:  # a current identity
-        return record
+        return _checked(record)
     flat = record.get("args") if "args" in record else record
     if not isinstance(flat, dict) or not all(k in flat for k in LEGACY_KEYS):
         return None
-    spec = record["spec"] if isinstance(record.get("spec"), dict) else spec_of_flat(flat)
+    try:
+        spec = record["spec"] if isinstance(record.get("spec"), dict) else spec_of_flat(flat)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgumentError(f"damaged run record ({exc}); restore run.json and "
+                                   "identity.json or use another --out") from None
     return {"spec_format": SPEC_FORMAT, "spec": spec,
             **{k: flat[k] for k in _RESOLVED if k in flat}}
+
+
+def _checked(identity: dict) -> dict:
+    """``identity`` if its spec is an object, else one line."""
+    if not isinstance(identity.get("spec"), dict):
+        raise InvalidArgumentError("damaged run record ('spec' is not an object); restore "
+                                   "run.json and identity.json or use another --out")
+    return identity
 
 
 def spec_json_of(run: dict, where: str = "run.json") -> dict:

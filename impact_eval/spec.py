@@ -102,10 +102,10 @@ class SweepSpec:
     bin_highs: tuple[float, ...] = option(None, default=(), resume="grow")
     """Mass bins ``[values[i], bin_highs[i])`` (``bins.py``); empty: a grid of fixed values."""
     episodes: int = option(Value("--episodes", "episodes per (method, value) (default 20)",
-                                 type=int, parse=int), default=20)
+                                 type=int), default=20)
     """Episodes per (method, value) cell."""
     seed: int = option(Value("--seed", "base seed of the paired episode seeds", type=int,
-                             parse=int, cli_default=0), default=0)
+                             cli_default=0), default=0)
     """Base seed of the paired episode seeds (``grid.episode_seed``)."""
     param: str | None = option(Value(
         "--param", "parameter to sweep: any the env declares (default: its first, e.g. "
@@ -226,15 +226,15 @@ class RunOptions:
     """Where and how a sweep runs; none of it changes a row. Each field declares its
     command-line form once (``cli_options.option``), as ``SweepSpec``'s do."""
 
-    out: Path = option(Value("--out", "output directory", type=Path, parse=Path))
+    out: Path = option(Value("--out", "output directory", type=Path))
     """Output directory (``episodes.csv``, ``run.json``, ``summary.csv``, ``plots/``)."""
     workers: int = option(Value(
         "--workers", "worker processes (default: CPU count; 1 runs in-process); --executor "
-        "local only", type=int, parse=int, cli_default=os.cpu_count() or 1), default=1)
+        "local only", type=int, cli_default=os.cpu_count() or 1), default=1)
     """Worker processes (``--workers``; the command line's default is the CPU count)."""
     envs_per_worker: int = option(Value(
         "--envs-per-worker", "envs each worker steps in lockstep with one batched policy call "
-        "(default 20)", type=int, parse=int), default=20)
+        "(default 20)", type=int), default=20)
     """Envs each worker steps in lockstep with one batched policy call."""
     resume: bool = option(Switch(
         "--resume", "continue OUT with the same methods, grid and episodes: skip (method, "
@@ -247,7 +247,7 @@ class RunOptions:
     video_episodes: int = option(Value(
         "--video", "write the first K episodes of every cell as MP4 to OUT/videos "
         "(imageio-ffmpeg; rendering is checked before anything is written; no display: "
-        "MUJOCO_GL=egl is picked when unset)", type=int, parse=int, metavar="K"), default=0)
+        "MUJOCO_GL=egl is picked when unset)", type=int, metavar="K"), default=0)
     """The first this many episodes of every cell as MP4 (``--video``; ``out/videos``)."""
     executor: str = option(Value(
         "--executor", "local (worker processes on this machine) | ray (Ray tasks on a "

@@ -97,8 +97,6 @@ def _with_defaults(a: argparse.Namespace) -> argparse.Namespace:
         raise InvalidArgumentError(
             f"missing {', '.join(missing)}; give them or use --quick (see {PROG} --help)"
         )
-    if a.episodes is None:
-        a.episodes = 20
     return a
 
 

@@ -134,3 +134,19 @@ def test_a_zero_byte_csv_is_a_fresh_start(finished: Path, tmp_path: Path) -> Non
     (out / "episodes.csv").write_bytes(b"")
     assert main(sweep_args(out, "--workers", "1")) == 0
     assert (out / "episodes.csv").read_bytes() == (finished / "episodes.csv").read_bytes()
+
+
+@pytest.mark.parametrize("identity", [
+    {"spec_format": 2, "spec": [1, 2], "param_name": "object_mass"},  # current layout
+    {"env": "x", "seed": 0, "methods": ["fake_fast"], "values": 3, "episodes": 2},  # legacy
+])
+def test_a_damaged_identity_is_one_line_and_changes_nothing(
+        identity: dict, finished: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = _copy(finished, tmp_path / "out")
+    (out / "run.json").unlink()
+    (out / "identity.json").write_text(json.dumps(identity))
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    assert main([*sweep_args(out, "--workers", "1"), "--resume"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "damaged run record" in err and "\n" not in err
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
