@@ -39,6 +39,7 @@ from impact_learn.collect_pixels import (
 )
 from impact_learn.collect_run import (
     AttemptBatch,
+    CollectionError,
     EpisodeResult,
     Expert,
     attempt_batches,
@@ -230,8 +231,6 @@ def main(argv: list[str] | None = None) -> None:
         parser.exit(2, f"impact-collect: error: unknown env {args.env!r}; valid: "
                        f"{', '.join(impact_envs.ENV_IDS)}\n")
     except ImpactError as exc:
-        from impact_learn.collect_ray import CollectionError
-
         code = 1 if isinstance(exc, CollectionError) else 2  # a failed run, not bad input
         parser.exit(code, f"impact-collect: error: {exc}\n")
     if stored < cfg.episodes:

@@ -51,7 +51,13 @@ class CameraView(gym.Wrapper):
                   if k not in state_space.spaces}
         self.observation_space = spaces.Dict({**state_space.spaces, **images})
 
+    rendering: bool = True
+    """Whether observations carry the images; ``collect_run.run_screened`` turns it off for
+    the first, state-only run of a batch's attempts."""
+
     def _with_images(self, obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        if not self.rendering:
+            return obs
         return {**obs, **self.pixels.render(self.env.unwrapped.sim.data)}
 
     def reset(self, *, seed: int | None = None,

@@ -16,15 +16,16 @@ from collections.abc import Callable, Generator, Iterator
 
 import gymnasium as gym
 
-from impact_control.errors import ImpactError
 from impact_envs.parallel import ray_session, ray_task_options, single_threaded_torch
 from impact_learn.collect_config import CollectConfig
-from impact_learn.collect_run import AttemptBatch, AttemptSpec, EpisodeResult, Expert, run_attempts
-
-
-class CollectionError(ImpactError):
-    """A batch of attempts failed on Ray (the stored episodes are kept)."""
-
+from impact_learn.collect_run import (  # noqa: F401 - CollectionError: its old home
+    AttemptBatch,
+    AttemptSpec,
+    CollectionError,
+    EpisodeResult,
+    Expert,
+    run_screened,
+)
 
 _STATE: dict[CollectConfig, tuple[list[gym.Env], Expert]] = {}
 """This Ray worker's envs and expert (one collection at a time; a new one replaces them)."""
@@ -45,7 +46,7 @@ def run_batch(cfg: CollectConfig, make_env: Callable[[], gym.Env],
         _STATE[cfg] = ([], make_expert())
     envs, expert = _STATE[cfg]
     envs += [make_env() for _ in range(len(spec.seeds) - len(envs))]
-    return run_attempts(envs[: len(spec.seeds)], expert, spec, cfg.post_success_steps)
+    return run_screened(envs[: len(spec.seeds)], expert, spec, cfg.post_success_steps)
 
 
 def ray_batch_results(

@@ -9,9 +9,15 @@ from typing import Protocol
 import gymnasium as gym
 import numpy as np
 
+from impact_control.errors import ImpactError
 from impact_control.policy import stack_obs
 from impact_envs.tasks.bins import mass_info_key
 from impact_learn.collect_config import CollectConfig
+
+
+class CollectionError(ImpactError):
+    """A collection run failed, not its input: a batch failed on Ray, or an attempt did not
+    repeat its own rollout (the stored episodes are kept)."""
 
 
 class Expert(Protocol):
@@ -175,10 +181,54 @@ def attempt_batches(cfg: CollectConfig, first: int, param_name: str) -> Iterator
         yield AttemptBatch(ids, spec)
 
 
+def run_screened(
+    envs: list[gym.Env],
+    expert: Expert,
+    attempts: AttemptSpec,
+    post_success_steps: int,
+) -> list[EpisodeResult]:
+    """``run_attempts`` with the cameras of ``CameraView`` envs rendering only the episodes
+    that are kept: every attempt runs first without images, then the successful ones run
+    again, from their seeds, with them. The results equal ``run_attempts``'s (a failed
+    attempt's images were never stored), at the cost of a state rollout per attempt instead of
+    rendering every step of every attempt, failures included (their 60 s on HammerBasket).
+    Envs without cameras run once, as ``run_attempts``.
+
+    Raises:
+        CollectionError: a successful attempt did not succeed again with its cameras on (the
+            rollout is not a function of its seed); nothing is stored from it.
+    """
+    views = [env for env in envs if hasattr(env, "rendering")]
+    if not views:
+        return run_attempts(envs, expert, attempts, post_success_steps)
+    for view in views:
+        view.rendering = False
+    try:
+        screened = run_attempts(envs, expert, attempts, post_success_steps)
+    finally:
+        for view in views:
+            view.rendering = True
+    kept = [i for i, result in enumerate(screened) if result.success]
+    if not kept:
+        return screened
+    again = AttemptSpec([attempts.seeds[i] for i in kept], [attempts.params[i] for i in kept],
+                        attempts.param_name)
+    results = list(screened)
+    for i, result in zip(kept, run_attempts(envs[:len(kept)], expert, again, post_success_steps),
+                         strict=True):
+        if not result.success or len(result.actions) != len(screened[i].actions):
+            raise CollectionError(
+                f"attempt with seed {attempts.seeds[i]} succeeded in {len(screened[i].actions)} "
+                f"steps without cameras but not again with them (success={result.success}, "
+                f"{len(result.actions)} steps): the rollout is not a function of its seed")
+        results[i] = result
+    return results
+
+
 def local_batch_results(
     envs: list[gym.Env], expert: Expert, batches: Iterator[AttemptBatch], post_success_steps: int
 ) -> Generator[tuple[AttemptBatch, list[EpisodeResult]], None, None]:
-    """Run each batch in this process when it is asked for."""
+    """Run each batch in this process when it is asked for (``run_screened``)."""
     for batch in batches:
         n = len(batch.ids)
-        yield batch, run_attempts(envs[:n], expert, batch.spec, post_success_steps)
+        yield batch, run_screened(envs[:n], expert, batch.spec, post_success_steps)

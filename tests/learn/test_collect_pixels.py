@@ -116,3 +116,86 @@ def test_resume_on_a_torn_last_image_chunk_is_one_line(tmp_path):
     with pytest.raises(InvalidArgumentError) as err:
         ReplayWriter(path, dims, {"env_id": "X"}, append=True)
     assert "the store is damaged" in str(err.value) and "\n" not in str(err.value)
+
+
+def _counting_views(n: int) -> tuple[list[CameraView], list[int]]:
+    """``n`` Hammer ``CameraView``s (300-step episodes: the expert succeeds in about 200) and
+    a one-element list counting their renders."""
+    views = [CameraView(gym.make(HAMMER, max_episode_steps=300), SMALL) for _ in range(n)]
+    count = [0]
+    for view in views:
+        render = view.pixels.render
+
+        def counted(data, render=render):
+            count[0] += 1
+            return render(data)
+
+        view.pixels.render = counted
+    return views, count
+
+
+class _OpenHandSecond:
+    """The Hammer expert, except that the second env's hand never closes: its attempt fails."""
+
+    def __init__(self) -> None:
+        from impact_envs.policies.experts import make_expert
+
+        self.expert = make_expert(HAMMER)
+
+    def reset(self, n_envs: int, object_mass_kg: np.ndarray) -> None:
+        self.expert.reset(n_envs, object_mass_kg=object_mass_kg)
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        actions = np.array(self.expert.act(obs), dtype=np.float32)
+        if len(actions) > 1:
+            actions[1, -1] = 1.0  # the gripper command: open
+        return actions
+
+
+def test_screened_attempts_render_only_the_kept_ones_and_equal_eager_ones():
+    """Of two attempts, one succeeds and one fails (its hand stays open): screening renders
+    the success alone (its steps + the reset) and returns the same arrays."""
+    from impact_learn.collect_run import AttemptSpec, run_attempts, run_screened
+
+    spec = AttemptSpec([11, 12], [0.2, 0.2], "object_mass")
+    views, count = _counting_views(2)
+    try:
+        eager = run_attempts(views, _OpenHandSecond(), spec, 5)
+        eager_renders, count[0] = count[0], 0
+        screened = run_screened(views, _OpenHandSecond(), spec, 5)
+    finally:
+        for view in views:
+            view.close()
+    assert [r.success for r in eager] == [True, False] == [r.success for r in screened]
+    assert eager_renders == len(eager[0].actions) + len(eager[1].actions) + 2
+    assert count[0] == len(eager[0].actions) + 1  # the kept attempt only
+    assert "overview_rgb" not in screened[1].obs  # the failure was never rendered
+    assert set(screened[0].obs) == set(eager[0].obs)
+    for key, value in eager[0].obs.items():
+        np.testing.assert_array_equal(screened[0].obs[key], value, err_msg=key)
+    np.testing.assert_array_equal(screened[0].actions, eager[0].actions)
+
+
+def test_a_kept_attempt_that_does_not_repeat_itself_stops_the_run(monkeypatch):
+    from impact_learn import collect_run
+
+    spec = collect_run.AttemptSpec([11], [0.2], "object_mass")
+    real, calls = collect_run.run_attempts, []
+
+    def second_run_fails(envs, expert, attempts, post):
+        results = real(envs, expert, attempts, post)
+        calls.append(1)
+        if len(calls) == 2:
+            results = [collect_run.EpisodeResult(r.obs, r.actions[:-1], False, r.param)
+                       for r in results]
+        return results
+
+    monkeypatch.setattr(collect_run, "run_attempts", second_run_fails)
+    views, _ = _counting_views(1)
+    from impact_envs.policies.experts import make_expert
+
+    try:
+        with pytest.raises(collect_run.CollectionError, match="seed 11 succeeded in .* not again"):
+            collect_run.run_screened(views, make_expert(HAMMER), spec, 0)
+    finally:
+        views[0].close()
