@@ -4,11 +4,13 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import re
 from pathlib import Path
 
 from impact_control.errors import CheckpointError
+from impact_envs.envs.options import ObservationOptions
 
 CHECKPOINTS_ENV_VAR = "IMPACT_CHECKPOINTS"
 """Environment variable overriding the shipped checkpoint root ``impact_envs/checkpoints``."""
@@ -71,3 +73,28 @@ def policy_checkpoint(env_id: str, policy: str | None) -> Path | None:
         except CheckpointError:
             variant = "vanilla"
     return checkpoint_dir(env_id, variant)
+
+
+def checkpoint_observation(path: Path) -> ObservationOptions | None:
+    """What the diffusion-policy checkpoint at ``path`` observes: the image observation its
+    demonstrations were recorded with (``meta.json``, ``dataset.attrs.observation``, written by
+    ``impact-collect --obs-mode``), None for a state checkpoint. The checkpoint is the one
+    declaration of its cameras and image size, so a visuomotor method runs with those of its
+    env's checkpoint (HammerBasket's ``basket_front``/``basket_side`` at 128², Hammer's
+    ``overview``/``wrist`` at 96²).
+
+    Raises:
+        CheckpointError: ``meta.json`` is missing or unreadable, or its observation invalid.
+    """
+    try:
+        meta = json.loads((path / "meta.json").read_text())
+        recorded = meta.get("dataset", {}).get("attrs", {}).get("observation")
+        if recorded is None:
+            return None
+        options = ObservationOptions(**recorded)
+    except (OSError, ValueError, TypeError, AttributeError) as exc:
+        msg = " ".join(str(exc).split())[:160]
+        raise CheckpointError(
+            f"cannot read the observation of checkpoint {path}: {type(exc).__name__}: {msg}"
+        ) from None
+    return options if options.uses_images else None

@@ -226,8 +226,8 @@ def method_env(env_id: str, spec: object, overrides: Sequence[str] = (),
     """``make_env`` for a method: its controller, preset, observation and robot, wrapped in
     ``impact_envs.wrappers.RLActions`` when the method acts in one of its modes (an SB3 model
     trained on the wrapper)."""
-    env = make_env(env_id, spec.controller, overrides, spec.preset, render, spec.observation,
-                   getattr(spec, "robot", None), robot_overrides)
+    env = make_env(env_id, spec.controller, overrides, spec.preset, render,
+                   spec.observation_for(env_id), getattr(spec, "robot", None), robot_overrides)
     if spec.action_mode is None:
         return env
     from impact_envs.wrappers import RLActions

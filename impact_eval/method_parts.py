@@ -5,9 +5,12 @@ the policy component (how its policy is built, what it observes) and the flags.
 |---------------------|--------------------------------------------------------------|
 | `scripted`          | the env's scripted expert, no load compensation              |
 | `scripted.closed_loop` | the expert compensating the sag in closed loop (Augmented) |
-| `dp.<variant>`      | the diffusion-policy checkpoint `<env>/<variant>`            |
+| `dp.<variant>`      | the diffusion-policy checkpoint `<env>/<variant>` (1)        |
 | `dp.nominal`        | `<env>/impact` where one ships, else `<env>/vanilla`         |
 | `lerobot.<variant>` | a LeRobot checkpoint `<env>/<variant>` (needs lerobot)       |
+
+(1) Its observation is the one its checkpoint was trained on: the state, or the cameras and
+image size its demonstrations recorded (``checkpoints.checkpoint_observation``).
 
 Factories import their dependencies on use, so the registry can be listed (and the sweep
 machinery tested) without the scripted experts, diffusion policies or LeRobot.
@@ -28,14 +31,6 @@ from impact_eval.checkpoints import checkpoint_dir
 
 PolicyFactory = Callable[[str, gym.Env], Policy]
 """``factory(env_id, env) -> Policy``; ``env`` is a built env of this method's controller."""
-
-RGB_OBSERVATION = ObservationOptions(obs_mode="rgb", cameras=("overview", "wrist"),
-                                     image_width=96, image_height=96, shadows=False)
-"""Observation of the visuomotor checkpoints: the two cameras the shipped one was trained on,
-96 x 96, without shadows (docs/diffusion_policy.md, "Visuomotor policy")."""
-
-RGB_VARIANTS = frozenset({"vanilla_rgb"})
-"""DP checkpoint variants that observe ``RGB_OBSERVATION`` (the others observe the state)."""
 
 AUTHORS_ROBOT = RobotOptions(torque_reading="commanded")
 """The robot of the ``commanded`` flag (the ``*_authors`` methods): the controller reads the
@@ -134,9 +129,8 @@ def policy_part(text: str) -> PolicyPart:
         return PolicyPart(text, _build_nominal_dp)
     kind, dot, variant = text.partition(".")
     if dot and _VARIANT.fullmatch(variant):
-        if kind == "dp":
-            observation = RGB_OBSERVATION if variant in RGB_VARIANTS else None
-            return PolicyPart(text, _dp_factory(variant), observation)
+        if kind == "dp":  # what it observes is its checkpoint's (MethodSpec.observation_for)
+            return PolicyPart(text, _dp_factory(variant))
         if kind == "lerobot":
             return PolicyPart(text, _lerobot_factory(variant))
     raise InvalidArgumentError(

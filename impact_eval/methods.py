@@ -19,8 +19,10 @@ name gives the same rows as its shortcut, but for the ``method`` column.
 | `impact_vanilla`  | `dp.vanilla+impact`                           |
 | `impact_paper`    | `dp.vanilla+impact@paper`                     |
 | `impact_warm`     | `dp.nominal+impact+warm`                      |
-| `vanilla_dp_rgb`  | `dp.vanilla_rgb+impedance` (cameras only)     |
-| `impact_rgb`      | `dp.vanilla_rgb+impact`                       |
+| `vanilla_dp_rgb`  | `dp.vanilla_rgb+impedance` (3)                |
+| `augmented_dp_rgb` | `dp.augmented_rgb+impedance` (3)             |
+| `impact_rgb`      | `dp.vanilla_rgb+impact` (3)                   |
+| `impact_authors_rgb` | `dp.vanilla_rgb+impact@authors_sim+carry+commanded` (1, 3) |
 | `impact_rgb_paper` | `dp.vanilla_rgb+impact@paper`                |
 | `scripted_impact_paper` | `scripted+impact@paper`                 |
 | `impact_authors`  | `dp.vanilla+impact@authors_sim+carry+commanded` (1) |
@@ -39,6 +41,12 @@ demonstrator's demos (``impact-collect --expert authors``) with their action con
 deltas from the measured TCP), on their baselines' controller (impedance, preset
 ``authors_sim``).
 
+(3) Visuomotor: the checkpoint sees its cameras and the robot's own state, never the object's
+pose; the env renders the cameras its demonstrations recorded (``MethodSpec.observation_for``).
+On HammerBasket the checkpoints learned from the authors' demonstrator under their baselines'
+controller, so their table runs the baselines as ``dp.vanilla_rgb+impedance@authors_sim``
+(docs/hammer_basket.md, "Policies with cameras").
+
 Syntax: ``+`` and ``@`` appear in no shortcut, a ``sb3:`` prefix is tested first (its path
 keeps any ``+`` or ``@``), and no ``,`` or ``:`` is used, so ``--method a,b`` and
 ``module:env`` ids parse as before.
@@ -54,7 +62,13 @@ from impact_control.controller import CONTROLLERS
 from impact_control.errors import InvalidArgumentError, check_choice
 from impact_control.presets import PRESETS
 from impact_envs.envs.options import ObservationOptions, RobotOptions, apply_robot_overrides
-from impact_eval.checkpoints import CHECKPOINTS_ENV_VAR, checkpoint_dir, env_short_name
+from impact_eval.checkpoints import (
+    CHECKPOINTS_ENV_VAR,
+    checkpoint_dir,
+    checkpoint_observation,
+    env_short_name,
+    policy_checkpoint,
+)
 from impact_eval.method_parts import AUTHORS_ROBOT, FLAGS, PolicyFactory, policy_part
 from impact_eval.sb3 import load_sb3, sb3_action_mode
 
@@ -112,12 +126,25 @@ class MethodSpec:
                 f"{self.controller} controller does not have; valid: warm on the "
                 f"{WARM_CONTROLLER} controller (POLICY+{WARM_CONTROLLER}[@PRESET]+warm)")
 
-    @property
-    def env_key(self) -> tuple[str, str, str | None, ObservationOptions | None,
-                               RobotOptions | None]:
-        """(controller, preset, action mode, observation, robot): methods with equal keys can
-        share envs."""
-        return self.controller, self.preset, self.action_mode, self.observation, self.robot
+    def observation_for(self, env_id: str) -> ObservationOptions | None:
+        """What the env observes for this method on ``env_id``: ``observation`` where set,
+        else, for a diffusion-policy checkpoint, the cameras it was trained on
+        (``checkpoints.checkpoint_observation``), else None (the state).
+
+        Raises:
+            CheckpointError: the method's checkpoint for ``env_id`` is missing or unreadable.
+        """
+        if self.observation is not None or self.policy is None \
+                or not self.policy.startswith("dp."):
+            return self.observation
+        return checkpoint_observation(policy_checkpoint(env_id, self.policy))
+
+    def env_key(self, env_id: str) -> tuple[str, str, str | None, ObservationOptions | None,
+                                            RobotOptions | None]:
+        """(controller, preset, action mode, observation, robot) on ``env_id``: methods with
+        equal keys can share envs."""
+        return (self.controller, self.preset, self.action_mode, self.observation_for(env_id),
+                self.robot)
 
     @property
     def settings(self) -> dict[str, object]:
@@ -273,7 +300,11 @@ SHORTCUTS = (
      "LeRobot's Diffusion Policy + IMPACT controller"),
     ("vanilla_dp_rgb", "dp.vanilla_rgb+impedance",
      "visuomotor Vanilla DP (cameras + the robot's own state), impedance"),
+    ("augmented_dp_rgb", "dp.augmented_rgb+impedance",
+     "visuomotor Augmented DP (cameras + the robot's own state), impedance"),
     ("impact_rgb", "dp.vanilla_rgb+impact", "visuomotor Vanilla DP + IMPACT controller"),
+    ("impact_authors_rgb", "dp.vanilla_rgb+impact@authors_sim+carry+commanded",
+     "visuomotor Vanilla DP + the authors' IMPACT controller as their simulation runs it"),
     ("impact_rgb_paper", "dp.vanilla_rgb+impact@paper",
      "visuomotor Vanilla DP + IMPACT controller, paper preset"),
 )

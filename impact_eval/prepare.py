@@ -146,13 +146,14 @@ def _inspect_env(sweep: SweepSpec, methods: list[MethodSpec], values: list[float
     envs = {}
     try:
         for spec in methods:
-            if spec.env_key not in envs:
-                envs[spec.env_key] = make_env(
+            key = spec.env_key(sweep.env_id)
+            if key not in envs:
+                envs[key] = make_env(
                     sweep.env_id, spec.controller, sweep.controller_overrides, spec.preset,
-                    observation=spec.observation, robot=spec.robot,
+                    observation=spec.observation_for(sweep.env_id), robot=spec.robot,
                     robot_overrides=sweep.robot_overrides)
             if spec.carry:
-                check_carries(spec, envs[spec.env_key], sweep.env_id)
+                check_carries(spec, envs[key], sweep.env_id)
         first = next(iter(envs.values()))
         info = describe_env(first, sweep.param)
         check_param(info, sweep.param)

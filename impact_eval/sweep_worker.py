@@ -41,7 +41,7 @@ class Worker:
         """At least ``n`` envs of the method's (controller, preset)."""
         from impact_eval.envs import method_env
 
-        envs = self.envs.setdefault(spec.env_key, [])
+        envs = self.envs.setdefault(spec.env_key(self.cfg.spec.env_id), [])
         while len(envs) < n:
             envs.append(method_env(self.cfg.spec.env_id, spec, self.cfg.spec.controller_overrides,
                                    render=self.cfg.options.video_episodes > 0,

@@ -202,7 +202,9 @@ def test_the_authors_methods() -> None:
             ("impact", "authors_sim", True, False)
         assert spec.robot is not None and spec.robot.torque_reading == "commanded"
         assert spec.policy == policy
-    assert resolve_method("impact_authors").env_key != resolve_method("impact_paper").env_key
+    hammer = "IMPACT/Hammer-v1"
+    assert resolve_method("impact_authors").env_key(hammer) != \
+        resolve_method("impact_paper").env_key(hammer)
 
 
 def test_a_method_env_gets_the_robot_options() -> None:

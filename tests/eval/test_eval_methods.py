@@ -11,6 +11,7 @@ import pytest
 from fixtures.eval_fake import BARE_ID, ENV_ID
 
 from impact_control.errors import CheckpointError, InvalidArgumentError
+from impact_envs.envs.options import ObservationOptions
 from impact_eval.cli import main
 from impact_eval.methods import (
     CHECKPOINTS_ENV_VAR,
@@ -219,26 +220,40 @@ def test_sb3_model_trained_on_rl_actions_is_evaluated_in_its_mode(tmp_path, monk
 
 
 def test_camera_methods_make_their_envs_with_the_checkpoint_cameras():
-    """``vanilla_dp_rgb`` / ``impact_rgb`` / ``impact_rgb_paper``: the env observes the two
-    cameras (no object pose), and these methods share envs only with methods of the same
-    observation."""
+    """``vanilla_dp_rgb`` / ``impact_rgb`` / ``impact_rgb_paper``: the env observes the cameras
+    the checkpoint's demonstrations recorded (Hammer: overview and wrist at 96², no shadows; no
+    object pose), and these methods share envs only with methods of the same observation."""
     from impact_eval.envs import method_env
-    from impact_eval.method_parts import RGB_OBSERVATION
 
+    hammer = "IMPACT/Hammer-v1"
+    expected = ObservationOptions(obs_mode="rgb", cameras=("overview", "wrist"), image_width=96,
+                                  image_height=96, shadows=False)
     rgb, impact_rgb = resolve_method("vanilla_dp_rgb"), resolve_method("impact_rgb")
     paper = resolve_method("impact_rgb_paper")
-    assert rgb.observation == impact_rgb.observation == paper.observation == RGB_OBSERVATION
+    assert rgb.observation_for(hammer) == impact_rgb.observation_for(hammer) == expected
+    assert paper.observation_for(hammer) == expected
+    assert resolve_method("vanilla_dp").observation_for(hammer) is None
     assert (rgb.controller, impact_rgb.controller) == ("impedance", "impact")
     assert (paper.controller, paper.preset, impact_rgb.preset) == ("impact", "paper", "default")
-    assert rgb.env_key != resolve_method("vanilla_dp").env_key
-    env = method_env("IMPACT/Hammer-v1", rgb)
+    assert rgb.env_key(hammer) != resolve_method("vanilla_dp").env_key(hammer)
+    env = method_env(hammer, rgb)
     try:
         spaces = env.observation_space.spaces
         assert spaces["overview_rgb"].shape == spaces["wrist_rgb"].shape == (96, 96, 3)
         assert "object_pos" not in spaces and "goal_pos" not in spaces
-        assert env.unwrapped.observation_options == RGB_OBSERVATION
+        assert env.unwrapped.observation_options == expected
     finally:
         env.close()
+
+
+def test_a_camera_method_without_its_checkpoint_is_one_line(monkeypatch, tmp_path):
+    monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(tmp_path))
+    with pytest.raises(CheckpointError, match="no vanilla_rgb checkpoint for IMPACT/Dumbbell-v1"):
+        resolve_method("vanilla_dp_rgb").observation_for("IMPACT/Dumbbell-v1")
+    (tmp_path / "dumbbell" / "vanilla_rgb").mkdir(parents=True)
+    (tmp_path / "dumbbell" / "vanilla_rgb" / "meta.json").write_text("{not json")
+    with pytest.raises(CheckpointError, match="cannot read the observation of checkpoint"):
+        resolve_method("vanilla_dp_rgb").observation_for("IMPACT/Dumbbell-v1")
 
 
 def test_the_sweep_passes_a_resolved_preset() -> None:

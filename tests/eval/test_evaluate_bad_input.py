@@ -205,9 +205,10 @@ def test_camera_checkpoint_fits_the_env_it_was_trained_for() -> None:
     import gymnasium as gym
 
     from impact_eval.api import check_fits_env
-    from impact_eval.method_parts import RGB_OBSERVATION
+    from impact_eval.checkpoints import checkpoint_dir, checkpoint_observation
 
-    env = gym.make(HAMMER, observation=RGB_OBSERVATION)
+    observation = checkpoint_observation(checkpoint_dir(HAMMER, "vanilla_rgb"))
+    env = gym.make(HAMMER, observation=observation)
     try:
         check_fits_env(_checkpoint("vanilla_rgb"), HAMMER, env)
     finally:
@@ -216,16 +217,23 @@ def test_camera_checkpoint_fits_the_env_it_was_trained_for() -> None:
 
 def test_cli_camera_checkpoint_as_a_state_method_exits_2_before_writing(
         tmp_path: Path, capsys, monkeypatch) -> None:
-    """Same class through impact-eval: a checkpoint root whose hammer/vanilla is a camera
-    checkpoint, run as vanilla_dp (state observation)."""
+    """A camera checkpoint runs with the cameras its meta.json records, whatever its folder's
+    name (``hammer/vanilla`` below: ``vanilla_dp`` observes them); one whose meta.json records
+    none (written by hand) is refused through impact-eval in one line, nothing written."""
+    import json
     import shutil
 
     from impact_eval.cli import main
-    from impact_eval.methods import CHECKPOINTS_ENV_VAR, checkpoint_dir
+    from impact_eval.methods import CHECKPOINTS_ENV_VAR, checkpoint_dir, resolve_method
 
     root = tmp_path / "checkpoints"
     shutil.copytree(checkpoint_dir(HAMMER, "vanilla_rgb"), root / "hammer" / "vanilla")
     monkeypatch.setenv(CHECKPOINTS_ENV_VAR, str(root))
+    assert resolve_method("vanilla_dp").observation_for(HAMMER).cameras == ("overview", "wrist")
+    meta_path = root / "hammer" / "vanilla" / "meta.json"
+    meta = json.loads(meta_path.read_text())
+    del meta["dataset"]["attrs"]["observation"]
+    meta_path.write_text(json.dumps(meta))
     out = tmp_path / "out"
     code = main(["--env", HAMMER, "--method", "vanilla_dp", "--masses", "2.5", "--episodes",
                  "1", "--workers", "1", "--out", str(out)])

@@ -12,7 +12,7 @@ import pytest
 from impact_control.errors import InvalidArgumentError
 from impact_eval import methods
 from impact_eval.cli import main
-from impact_eval.method_parts import FLAGS, POLICY_FORMS, RGB_OBSERVATION
+from impact_eval.method_parts import FLAGS, POLICY_FORMS
 from impact_eval.methods import SHORTCUTS, compose, method_choices, resolve_method
 from impact_eval.reproduce import parse_cells
 from impact_eval.video import video_path
@@ -20,7 +20,8 @@ from impact_eval.video import video_path
 
 def _identity(spec: methods.MethodSpec) -> tuple:
     """Everything of a method but its name, description and factory object."""
-    return (spec.policy, spec.env_key, spec.settings, spec.warm, spec.carry)
+    return (spec.policy, spec.controller, spec.preset, spec.action_mode, spec.observation,
+            spec.robot, spec.settings, spec.warm, spec.carry)
 
 
 @pytest.mark.parametrize(("name", "composition"), [(n, c) for n, c, _ in SHORTCUTS])
@@ -42,7 +43,7 @@ def test_parts_map_to_the_spec() -> None:
         ("impact", "authors_sim", True, False)
     assert spec.robot is not None and spec.robot.torque_reading == "commanded"
     assert compose("dp.nominal+impact+warm").warm
-    assert compose("dp.vanilla_rgb+impedance").observation == RGB_OBSERVATION
+    assert compose("dp.vanilla_rgb+impedance").observation is None  # its checkpoint's, per env
     assert compose("dp.my_run_3+impedance").policy == "dp.my_run_3"  # any checkpoint folder
     assert compose("scripted+impact").preset == "default"
 
