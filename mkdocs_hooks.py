@@ -1,5 +1,10 @@
 """MkDocs hooks of the documentation site (mkdocs.yml ``hooks``): the figures under
-``results/`` appear on the site as they appear on GitHub.
+``results/`` appear on the site as they appear on GitHub, and the API reference covers every
+public name.
+
+``on_pre_build`` fails the build when a name in the ``__all__`` of a package in
+``PUBLIC_PACKAGES`` has no ``::: <package>....<name>`` entry on a page under ``docs/api/``
+(``undocumented``; tests/test_docs_site.py lists them without building).
 
 The Markdown pages link a table's figure where the command that made it wrote it, e.g.
 ``../results/hammer_basket/plots/authors_figure.png`` from ``docs/results.md``: right on
@@ -11,15 +16,45 @@ never copied into ``docs/``: one file, made by its command.
 
 from __future__ import annotations
 
+import importlib
 import re
 from pathlib import Path
 
+from mkdocs.exceptions import PluginError
 from mkdocs.structure.files import File, Files
 
 REPO = Path(__file__).resolve().parent
 RESULTS = REPO / "results"
 SITE_DIR = "_results"
 LINK = re.compile(r"\]\(((?:\.\./)+)results/")
+
+
+PUBLIC_PACKAGES = ("impact_control", "impact_envs", "impact_eval", "impact_franka",
+                   "impact_lerobot")
+"""The packages whose ``__all__`` is the API a user is told to call."""
+DIRECTIVE = re.compile(r"^::: ([\w.]+)\s*$", re.MULTILINE)
+
+
+def undocumented(docs_dir: Path) -> list[str]:
+    """``package.name`` of each public name without an API entry: an entry documents it when
+    its path is inside the package and ends with the name (``impact_eval.api.evaluate``
+    documents ``impact_eval.evaluate``, which calls it)."""
+    entries = {d for page in (docs_dir / "api").glob("*.md")
+               for d in DIRECTIVE.findall(page.read_text())}
+    missing = []
+    for package in PUBLIC_PACKAGES:
+        for name in importlib.import_module(package).__all__:
+            if not any(e.startswith(f"{package}.") and e.rsplit(".", 1)[-1] == name
+                       for e in entries):
+                missing.append(f"{package}.{name}")
+    return missing
+
+
+def on_pre_build(config) -> None:
+    missing = undocumented(Path(config["docs_dir"]))
+    if missing:
+        raise PluginError(f"the API reference (docs/api/) lacks {len(missing)} public "
+                          f"name(s): {', '.join(missing)}; add a '::: module.name' entry")
 
 
 LINKED = re.compile(r"\]\((?:\.\./)+results/([^)\s#]+)\)")

@@ -9,3 +9,25 @@ policy at 30 Hz; ``cli.py`` / ``checks.py`` (every argument, before connecting) 
 ``session.py``: ``impact-robot``. Proven against
 libfranka-protocol simulators on loopback (tests/franka/); docs/franka.md, docs/hardware.md.
 """
+
+from __future__ import annotations
+
+import importlib
+
+_PUBLIC = {
+    "run_loop": "impact_franka.runner", "hold": "impact_franka.runner",
+    "HoldTarget": "impact_franka.runner", "TargetSource": "impact_franka.runner",
+    "LoopReport": "impact_franka.runner", "PolicyTarget": "impact_franka.policy_loop",
+    "PickPlaceTarget": "impact_franka.pick_place", "fr3_config": "impact_franka.fci",
+    "FrankaError": "impact_franka.fci",
+}
+"""Where each public name lives; imported on first use, so ``import impact_franka`` stays
+light (pylibfranka is imported only by the code that connects)."""
+
+__all__ = sorted(_PUBLIC)
+
+
+def __getattr__(name: str) -> object:
+    if name not in _PUBLIC:
+        raise AttributeError(f"module 'impact_franka' has no attribute {name!r}")
+    return getattr(importlib.import_module(_PUBLIC[name]), name)

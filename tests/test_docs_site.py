@@ -32,3 +32,27 @@ def test_the_site_builds_strictly(tmp_path: Path) -> None:
     assert "Observation space" in env_page and "Version history" in env_page  # the docstring
     start = (site / "index.html").read_text()
     assert "pip install torch==2.13.0" in start  # the README's commands, one source
+
+
+def test_every_public_name_has_an_api_entry_and_a_missing_one_fails_the_build(
+        tmp_path: Path) -> None:
+    """The public API is the ``__all__`` of ``mkdocs_hooks.PUBLIC_PACKAGES``; each name has a
+    ``:::`` entry under docs/api/, and without one ``on_pre_build`` stops the build."""
+    pytest.importorskip("mkdocs", reason="the docs extra is not installed")
+    sys.path.insert(0, str(REPO))
+    try:
+        from mkdocs.exceptions import PluginError
+
+        import mkdocs_hooks
+    finally:
+        sys.path.remove(str(REPO))
+    assert mkdocs_hooks.undocumented(REPO / "docs") == []
+    (tmp_path / "api").mkdir()
+    page = (REPO / "docs" / "api" / "eval.md").read_text()
+    for other in (REPO / "docs" / "api").glob("*.md"):
+        text = page.replace("::: impact_eval.api.evaluate\n", "") if other.name == "eval.md" \
+            else other.read_text()
+        (tmp_path / "api" / other.name).write_text(text)
+    assert mkdocs_hooks.undocumented(tmp_path) == ["impact_eval.evaluate"]
+    with pytest.raises(PluginError, match="lacks 1 public name.*impact_eval.evaluate"):
+        mkdocs_hooks.on_pre_build({"docs_dir": str(tmp_path)})
