@@ -9,7 +9,7 @@ Apache-2.0; read, not copied). Paths below are inside it:
 - SIM = ``ros_ws/src/sim_bringup/config/mujoco_overrides.yaml`` (their simulation's
   overrides, lines 11-21)
 
-Each value below cites where it is set; docs/controller.md ("The authors' controller") has
+Each value below cites where it is set; docs/presets.md ("The authors' controller") has
 the table. Where their code does something other than its own description, the presets
 run it as coded and the intended variant is one field away:
 

@@ -8,7 +8,7 @@ robot (``"authors_real"``; ``authors_presets.py``).
 ``paper`` is the literal reading of the IMPACT paper's hyper-parameter table, exactly the
 defaults this project shipped until 2026-11-24 (every field equal, bit for bit).
 ``default`` departs from it in the fields listed in ``DEPARTURES``, each chosen by measurement
-on tuning seeds and justified in docs/controller.md ("Presets"); the ablation that reverts
+on tuning seeds and justified in docs/presets.md ("Presets"); the ablation that reverts
 each one alone is in docs/results.md.
 
     ControllerConfig()                     # the "default" preset
@@ -35,7 +35,7 @@ KEEP_CARRIED: dict[str, str] = {
     "saturation_release.spare_carried": "True",
 }
 """Fields where ``keep_carried`` differs from ``default`` (issue 54's preset, chosen on tuning
-seeds on Hammer and HammerBasket, docs/controller.md "Keep carried"): once the TCP has risen
+seeds on Hammer and HammerBasket, docs/presets.md "Keep carried"): once the TCP has risen
 20 mm since the gripper closed, the saturated-lift release no longer scales the feedforward
 down, so a load the arm has lifted is carried, not let go, while the wrist is at its bound."""
 
@@ -45,7 +45,7 @@ LIFT_WATCH: dict[str, str] = {
 }
 """Fields where ``lift_watch`` differs from ``default`` (issue 54: a learned load is fed
 forward only while the arm carries it; ``saturation_release.py``, "Lift watch"). Experimental,
-not adopted: its reference-seed check loses lifts (docs/controller.md, "Lift watch")."""
+not adopted: its reference-seed check loses lifts (docs/presets.md, "Lift watch")."""
 ROBOT_PRESETS: tuple[str, ...] = tuple(name for name in PRESETS if name not in SIM_ONLY)
 """The presets that may run on a real FR3 (``impact-robot --preset``): all but
 ``SIM_ONLY``'s."""

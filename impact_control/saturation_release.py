@@ -4,7 +4,7 @@ authors' presets): stop asking for a lift the arm cannot give.
 Why: with a load whose moment about the wrist exceeds the wrist's torque (Hammer, 8.5-10 kg;
 joint 6's bound is 12 Nm), the learned feedforward keeps asking for the lift, a joint sits at
 its torque bound for seconds, the load never rises and the hand leans on the table
-(docs/controller.md, "What it teaches ``default``"). The limiter knows it: its output of the
+(docs/presets.md, "What it teaches ``default``"). The limiter knows it: its output of the
 previous tick equals the bound.
 
 Per tick (``saturation_release_step``), with ``tau`` the limiter's output of the previous tick
@@ -50,7 +50,7 @@ episode that starts with the gripper closed (a tool already in the hand) never a
 ``enabled=False`` (``paper``, ``authors_sim``, ``authors_real``): the tick never names this
 stage (``optional_stages.py``). ``default``'s values (hold 0.5 s, release 0.25 s, recover 2 s,
 margin 0.1 Nm, rise 10 mm) were chosen on tuning seeds and ablated on the reference seeds
-(docs/controller.md, "Saturated-lift release").
+(docs/presets.md, "Saturated-lift release").
 """
 
 from __future__ import annotations

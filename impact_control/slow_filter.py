@@ -44,7 +44,7 @@ class SlowWrenchConfig:
 
     Attributes:
         rate_force_per_s: eta of the force axes [1/s]; per-tick gain eta * dt (default 20,
-            a 50 ms time constant; paper: 2.0, docs/controller.md "Presets").
+            a 50 ms time constant; paper: 2.0, docs/presets.md "Presets").
         rate_torque_per_s: eta of the torque axes [1/s] (paper: 1.0).
         clip_force_n: Per-axis clip of (w_ext - w_slow) on force axes [N] (paper: 10).
         clip_torque_nm: Per-axis clip on torque axes [Nm] (paper: 1).

@@ -194,7 +194,7 @@ def evaluate(
         controller: ``"impact"`` or ``"impedance"``.
         controller_preset: The controller's preset, one of ``impact_control.presets.PRESETS``
             (``"default"``, ``"paper"``, ``"authors_sim"``, ``"authors_real"``;
-            docs/controller.md, "Presets").
+            docs/presets.md, "Presets").
         name: The method's name in the CSV and plots; not a built-in method's name. It is
             registered for this call only.
         param: The parameter to sweep (default: the env's first).

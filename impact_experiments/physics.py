@@ -10,7 +10,7 @@
 3. **Noise floor of the surprise**: the arm holds still with nothing attached; the force part
    of the raw estimate and of the slow wrench (what the surprise of a zero prediction reads)
    over 3 s per pose: per-axis standard deviation and the largest norm. The ``default``
-   preset's 2.5 N gate threshold is set from it (docs/controller.md, "Presets").
+   preset's 2.5 N gate threshold is set from it (docs/presets.md, "Presets").
 """
 
 from __future__ import annotations

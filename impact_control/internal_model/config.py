@@ -21,7 +21,7 @@ class InternalModelConfig:
         learning_rate: Plain SGD step size on the normalized MSE (default 0.1; paper: 0.01).
         surprise_open_n: Gate opens when the force surprise reaches this value [N] (default
             2.5, 4.5x the largest excursion of the simulated estimator's force noise at
-            rest, docs/controller.md "Presets"; paper: 5).
+            rest, docs/presets.md "Presets"; paper: 5).
         surprise_release_n: Open gate closes when the force surprise falls below this [N]
             (own choice 0.5; equal to ``surprise_open_n`` gives the literal single threshold).
         slow_rate_max: Learning only while the slow-wrench rate (|dw_slow/dt|_force divided by
