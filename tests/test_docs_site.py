@@ -56,3 +56,19 @@ def test_every_public_name_has_an_api_entry_and_a_missing_one_fails_the_build(
     assert mkdocs_hooks.undocumented(tmp_path) == ["impact_eval.evaluate"]
     with pytest.raises(PluginError, match="lacks 1 public name.*impact_eval.evaluate"):
         mkdocs_hooks.on_pre_build({"docs_dir": str(tmp_path)})
+
+
+def test_the_public_names_are_read_without_importing_the_packages() -> None:
+    """The hook reads each ``__all__`` from the source (a docs-only install has no MuJoCo):
+    the same names the imported packages declare."""
+    import importlib
+
+    pytest.importorskip("mkdocs", reason="the docs extra is not installed")
+    sys.path.insert(0, str(REPO))
+    try:
+        import mkdocs_hooks
+    finally:
+        sys.path.remove(str(REPO))
+    for package in mkdocs_hooks.PUBLIC_PACKAGES:
+        declared = importlib.import_module(package).__all__
+        assert mkdocs_hooks.public_names(package) == list(declared), package
