@@ -13,6 +13,9 @@ bytes however the sweep is run.
 Resume: a partly written cell is rerun from episode 0 up to its last missing episode, and only
 the missing rows are written (the rerun episodes are deterministic: the same rows again).
 
+``--end-early`` does not apply to a chain: an episode's end state is the next one's start, so
+each runs its full length.
+
 An episode that ends in an exception (``failure_reason`` ``unstable: ...`` or ``exception:
 ...``) passes nothing on: the next starts from a fresh controller, as a relaunched controller
 would (a diverged state would otherwise fail every later episode of the cell).

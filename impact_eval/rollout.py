@@ -30,6 +30,12 @@ class EpisodeJob:
     its drawn mass, ``value`` being the bin's lower edge; ``bins.draw_in_bin``)."""
 
 
+SETTLE_S = 2.0
+"""``--end-early``: an episode ends once its env has reported a settled outcome
+(``ImpactEnv.outcome_settled``) on every step of this long [s]."""
+SETTLED_REASON = "outcome settled"
+"""The failure reason of a failed episode ended early (a successful one has none)."""
+
 FinishCallback = Callable[[int, dict[str, object]], None]
 """Called as ``on_finish(batch_index, metric_columns)`` the moment an episode ends."""
 
@@ -100,6 +106,10 @@ class LockstepBatch:
         """Batch index -> ``video.EpisodeVideo`` of the episodes recorded (``--video``)."""
         self.mass_key = mass_info_key(envs[0]) if envs else MASS_PARAM
         """The ``info`` key of the env's mass (``episodes.csv``'s ``drawn_mass_kg``)."""
+        self.end_early = False
+        """End an episode once its outcome has been settled for ``SETTLE_S`` (``--end-early``,
+        ``SweepSpec.end_early``)."""
+        self._settled_steps: list[int] = []
         self.with_press_diagnostics = False
         """Add ``safety.FF_PRESS_COLUMNS`` and ``NET_CONTACT_COLUMNS`` to each finished
         episode's columns (issue 54's
@@ -121,6 +131,7 @@ class LockstepBatch:
         if isinstance(self.policy, SeededPolicy):  # per-episode noise, whatever the batch
             self.policy.seed_envs([job.seed for job in jobs])
         trackers = [EpisodeTracker(self.policy_dt, mass_key=self.mass_key) for _ in range(n)]
+        self._settled_steps = [0] * n
         obs = [self._reset(i, job, trackers[i], on_finish) for i, job in enumerate(jobs)]
         while not all(t.done for t in trackers):
             if heartbeat is not None:
@@ -178,7 +189,16 @@ class LockstepBatch:
         if terminated or truncated:
             reason = str(info.get("failure_reason") or ("timeout" if truncated else "terminated"))
             self._finish(i, tracker, reason, on_finish)
+        elif self.end_early and self._settled(i):
+            self._finish(i, tracker, SETTLED_REASON, on_finish)
         return obs
+
+    def _settled(self, i: int) -> bool:
+        """Env ``i``'s outcome has been settled on every step of the last ``SETTLE_S``."""
+        settled = getattr(self.envs[i].unwrapped, "outcome_settled", None)
+        self._settled_steps[i] = self._settled_steps[i] + 1 \
+            if callable(settled) and settled() else 0
+        return self._settled_steps[i] * self.policy_dt >= SETTLE_S - 1e-9
 
     def _record(self, i: int) -> None:
         """Add env ``i``'s current frame to its video, if its episode is recorded."""

@@ -39,6 +39,7 @@ def spec_of_flat(flat: dict) -> dict:
         "controller_overrides": list(flat.get("controller_overrides") or []),
         "robot_overrides": list(flat.get("robot_overrides") or []),
         "beyond_hardware_limits": bool(flat.get("beyond_hardware_limits", False)),
+        "end_early": False,
     }
 
 

@@ -120,6 +120,13 @@ class SweepSpec:
         Repeated("--robot-set", robot_set_help("run.json, checked on --resume; for every "
                                                "method"), metavar="FIELD=VALUE"), default=())
     """``FIELD=VALUE`` changes of every method's simulated robot (``--robot-set``)."""
+    end_early: bool = option(Switch(
+        "--end-early", "end an episode once its outcome can no longer change (the env's "
+        "outcome_settled for 2 s; HammerBasket); its length and the columns summed or peaked "
+        "over it then cover the steps it ran (docs/eval.md)"), default=False)
+    """End each episode once its env reports a settled outcome for ``rollout.SETTLE_S``
+    (``ImpactEnv.outcome_settled``): fewer steps, the same outcomes (checked against
+    full-length episodes, docs/eval.md "Ending an episode early")."""
     beyond_hardware_limits: bool = option(Switch(
         "--beyond-hardware-limits", "allow --controller-set limits above the FR3's (87/12 Nm, "
         "1000 Nm/s); recorded in run.json"), default=False, resume="free")

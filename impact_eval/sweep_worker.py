@@ -70,6 +70,7 @@ class Worker:
                 warm_start(snapshot)
         batch = LockstepBatch(envs, self._policy(task.method), self.cfg.param_name,
                               self.cfg.policy_dt, self._videos(task))
+        batch.end_early = self.cfg.spec.end_early  # not in a carried chain (chain.py)
 
         def on_finish(i: int, metrics: dict[str, object]) -> None:
             sink(self.row(task.method, task.jobs[i], metrics))

@@ -382,6 +382,11 @@ class ImpactEnv(gym.Env):
         self._renderer.update_scene(self.sim.data, camera=self._camera)
         return self._renderer.render()
 
+    def outcome_settled(self) -> bool:
+        """Whether this episode's outcome can no longer change (the task's
+        ``outcome_settled``; never for most tasks): ``impact-eval --end-early`` reads it."""
+        return bool(self.task.outcome_settled(self.sim))
+
     def skip_next_images(self) -> None:
         """The next ``step``'s observation holds zero images instead of rendered ones, and its
         ``info["images_rendered"]`` is False: for a reader that will not look at them

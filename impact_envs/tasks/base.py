@@ -240,6 +240,12 @@ class Task(ABC):
         """Extra task-specific per-step info. Default: none."""
         return {}
 
+    def outcome_settled(self, sim: FrankaSim) -> bool:
+        """True when this episode's outcome can no longer change from the scene's state alone
+        (``impact-eval --end-early`` ends it once this holds for ``rollout.SETTLE_S``).
+        Default: never (every episode runs to its end)."""
+        return False
+
     def supported_weight_n(self, values: Mapping[str, float]) -> float:
         """Object-on-scene contact force [N] that is the task's normal support, not a safety
         event, for the episode's parameter ``values``: the weight of an object the task sets

@@ -45,6 +45,12 @@ from y = 0.034 m at its end to 0.011 m at the head; the scene's handle box)."""
 HANDLE_Y_AT_ORIGIN_M = 0.015
 """Where the handle's centreline crosses the body origin's x, hammer frame y [m] (their mesh:
 at x = 0 the handle spans y 0.004-0.025 m; the scene's handle box: 0.0015-0.0285 m)."""
+SETTLED_SPEED_M_S = 0.01
+"""A hammer moving slower than this [m/s] (its body origin) and turning slower than
+``SETTLED_SPIN_RAD_S`` is at rest (``outcome_settled``)."""
+SETTLED_SPIN_RAD_S = 0.1
+FELL_BELOW_M = TABLE_TOP_M - 0.10
+"""A hammer origin below this height [m] has left the table: nothing brings it back."""
 HOME_Q = np.array([0.0, -np.pi / 4, 0.0, -3 * np.pi / 4, 0.0, np.pi / 2, np.pi / 4])
 """Their home posture [rad] (the scene keyframe), without noise, as their reset does."""
 
@@ -105,6 +111,20 @@ class HammerBasketTask(Task):
 
     def info(self, sim: FrankaSim) -> dict[str, float | bool]:
         return {"is_grasped": sim.object_finger_contacts("hammer") >= 2}
+
+    def outcome_settled(self, sim: FrankaSim) -> bool:
+        """Their test holds with the hammer let go (no finger touches it) and at rest, or the
+        hammer has left the table. Whether a policy ever picks a placed hammer up again is
+        not a property of the scene: ``--end-early`` was checked against full-length episodes
+        (docs/eval.md, "Ending an episode early")."""
+        d = sim.data
+        if d.xpos[self.hammer, 2] < FELL_BELOW_M:
+            return True
+        if not self.is_success(sim) or sim.object_finger_contacts("hammer") > 0:
+            return False
+        vel = d.qvel[self.body.dof_adr:self.body.dof_adr + 6]
+        return bool(np.linalg.norm(vel[:3]) < SETTLED_SPEED_M_S
+                    and np.linalg.norm(vel[3:]) < SETTLED_SPIN_RAD_S)
 
     def supported_weight_n(self, values: Mapping[str, float]) -> float:
         """The hammer's weight, m g [N]: it rests on the table and in the basket."""
