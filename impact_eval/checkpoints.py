@@ -83,9 +83,14 @@ def checkpoint_observation(path: Path) -> ObservationOptions | None:
     env's checkpoint (HammerBasket's ``basket_front``/``basket_side`` at 128², Hammer's
     ``overview``/``wrist`` at 96²).
 
+    A checkpoint without ``meta.json`` records nothing: None here, and loading it reports
+    what is wrong with it (``method_parts._dp_factory``).
+
     Raises:
-        CheckpointError: ``meta.json`` is missing or unreadable, or its observation invalid.
+        CheckpointError: ``meta.json`` is unreadable, or its observation invalid.
     """
+    if not (path / "meta.json").is_file():
+        return None
     try:
         meta = json.loads((path / "meta.json").read_text())
         recorded = meta.get("dataset", {}).get("attrs", {}).get("observation")
