@@ -1,7 +1,7 @@
 """Named controller presets: ``"default"`` (the shipped configuration), ``"paper"``,
-``"keep_carried"`` (``default`` whose saturated-lift release spares a lifted load:
-``KEEP_CARRIED``, issue 54), ``"lift_watch"`` (experimental: ``default`` with the lift watch,
-``LIFT_WATCH``), and the
+``"keep_carried"`` (the saturated-lift release spares a lifted load: ``KEEP_CARRIED``, issue
+54; ``default`` since revision 2), ``"lift_watch"`` (experimental: ``default`` with the lift
+watch, ``LIFT_WATCH``), and the
 authors' released controller as it runs in their simulation (``"authors_sim"``) and on their
 robot (``"authors_real"``; ``authors_presets.py``).
 
@@ -11,10 +11,16 @@ defaults this project shipped until 2026-11-24 (every field equal, bit for bit).
 on tuning seeds and justified in docs/presets.md ("Presets"); the ablation that reverts
 each one alone is in docs/results.md.
 
-    ControllerConfig()                     # the "default" preset
+    ControllerConfig()                     # the "default" preset (of the latest revision)
     preset_config("paper")                 # the paper-literal table
-    gym.make("IMPACT/Hammer-v1", controller_preset="paper")
+    gym.make("IMPACT/Hammer-v2", controller_preset="paper")
     preset_config("default", estimator="momentum")  # the momentum-observer estimator
+    preset_config("default", revision=1)   # the default of the -v1 envs
+
+Revisions: a preset name keeps its values for ever within a revision (``REVISIONS``). The
+envs pin theirs (``impact_envs/versions.py``: ``-v1`` runs revision 1, ``-v2`` revision 2), so a
+table recorded on ``-v1`` reproduces whatever ``default`` is now; ``impact-robot`` and
+``ControllerConfig()`` are the latest revision.
 """
 
 from __future__ import annotations
@@ -34,10 +40,12 @@ PRESETS: tuple[str, ...] = ("default", "paper", "keep_carried", "lift_watch",
 KEEP_CARRIED: dict[str, str] = {
     "saturation_release.spare_carried": "True",
 }
-"""Fields where ``keep_carried`` differs from ``default`` (issue 54's preset, chosen on tuning
-seeds on Hammer and HammerBasket, docs/presets.md "Keep carried"): once the TCP has risen
-20 mm since the gripper closed, the saturated-lift release no longer scales the feedforward
-down, so a load the arm has lifted is carried, not let go, while the wrist is at its bound."""
+"""Fields where ``keep_carried`` differs from the revision-1 ``default`` (issue 54's preset,
+chosen on tuning seeds on Hammer and HammerBasket, docs/presets.md "Keep carried"; equal to
+``default`` from revision 2, the name kept so that its tables and commands still run): once
+the TCP has risen 20 mm since the gripper closed, the saturated-lift release no longer scales
+the feedforward down, so a load the arm has lifted is carried, not let go, while the wrist is
+at its bound."""
 
 LIFT_WATCH: dict[str, str] = {
     "saturation_release.lift_watch_s": "4.0",
@@ -46,6 +54,19 @@ LIFT_WATCH: dict[str, str] = {
 """Fields where ``lift_watch`` differs from ``default`` (issue 54: a learned load is fed
 forward only while the arm carries it; ``saturation_release.py``, "Lift watch"). Experimental,
 not adopted: its reference-seed check loses lifts (docs/presets.md, "Lift watch")."""
+REVISIONS: dict[int, dict[str, str]] = {
+    1: {"saturation_release.spare_carried": "False"},
+    2: {},
+}
+"""The presets' revisions: for each, the fields where its ``default`` differs from
+``ControllerConfig()`` (``SECTION.FIELD`` keys). Revision 1 is ``default`` until 2026-12-02
+(issue 59), whose saturated-lift release also lets go of a load the arm has lifted; revision 2
+makes ``keep_carried`` the ``default`` (docs/presets.md, "Keep carried"). Only ``default``
+differs between revisions: every other preset sets the field itself or reverts it
+(``DEPARTURES``)."""
+LATEST_REVISION = max(REVISIONS)
+"""The revision of ``ControllerConfig()``, of ``impact-robot`` and of the current envs."""
+
 ROBOT_PRESETS: tuple[str, ...] = tuple(name for name in PRESETS if name not in SIM_ONLY)
 """The presets that may run on a real FR3 (``impact-robot --preset``): all but
 ``SIM_ONLY``'s."""
@@ -60,6 +81,7 @@ DEPARTURES: dict[str, str] = {
     "limits.torque_rate_max_nm_per_s": "1000.0",
     "internal_model.learner": "numpy",
     "saturation_release.enabled": "False",
+    "saturation_release.spare_carried": "False",
 }
 """Fields where ``default`` differs from ``paper``, with the paper's value (``SECTION.FIELD``
 keys, the syntax of ``--controller-set``; ``revert_departure`` applies one)."""
@@ -86,38 +108,49 @@ CUSTOM = "custom"
 
 
 def resolve_preset(name: str, overrides: Sequence[str] = (),
-                   label: str = "controller_preset") -> Preset:
-    """Preset ``name`` (one of ``PRESETS``; a one-line error naming them, as ``label``) with
-    ``SECTION.FIELD=VALUE`` ``overrides`` applied (``impact_control.overrides``): named
-    ``name`` without overrides, ``"custom"`` with them."""
+                   label: str = "controller_preset",
+                   revision: int = LATEST_REVISION) -> Preset:
+    """Preset ``name`` (one of ``PRESETS``; a one-line error naming them, as ``label``) of
+    ``revision`` with ``SECTION.FIELD=VALUE`` ``overrides`` applied
+    (``impact_control.overrides``): named ``name`` without overrides, ``"custom"`` with them."""
     check_choice(label, name, PRESETS)
-    config = _preset_config(name)
+    config = _preset_config(name, revision=_revision(revision))
     if overrides:
         return Preset(CUSTOM, apply_overrides(config, list(overrides)))
     return Preset(name, config)
 
 
-def as_preset(given: str | ControllerConfig | Preset) -> Preset:
-    """What an env's ``controller_preset`` argument was given, as a ``Preset``: a name is
-    resolved, a ``Preset`` kept, and a bare ``ControllerConfig`` named after the preset it
-    equals field for field (else ``"custom"``): the one place a config is matched to a name,
-    for users who build a config themselves."""
+def as_preset(given: str | ControllerConfig | Preset,
+              revision: int = LATEST_REVISION) -> Preset:
+    """What an env's ``controller_preset`` argument was given, as a ``Preset`` of
+    ``revision``: a name is resolved, a ``Preset`` kept, and a bare ``ControllerConfig`` named
+    after the preset it equals field for field (else ``"custom"``): the one place a config is
+    matched to a name, for users who build a config themselves."""
     if isinstance(given, Preset):
         return given
     if isinstance(given, ControllerConfig):
-        return Preset(preset_name(given), given)
-    return resolve_preset(given)
+        return Preset(preset_name(given, revision), given)
+    return resolve_preset(given, revision=revision)
 
 
-def preset_config(name: str, estimator: str | None = None) -> ControllerConfig:
-    """The ``ControllerConfig`` of preset ``name`` (one of ``PRESETS``), with the wrench
-    estimator of kind ``estimator`` (``ESTIMATOR_KINDS``: "residual", the presets', or
-    "momentum") when given."""
+def preset_config(name: str, estimator: str | None = None,
+                  revision: int = LATEST_REVISION) -> ControllerConfig:
+    """The ``ControllerConfig`` of preset ``name`` (one of ``PRESETS``) of ``revision`` (one
+    of ``REVISIONS``), with the wrench estimator of kind ``estimator`` (``ESTIMATOR_KINDS``:
+    "residual", the presets', or "momentum") when given."""
     check_choice("controller preset", name, PRESETS)
-    return _preset_config(name, estimator)
+    return _preset_config(name, estimator, _revision(revision))
 
 
-def _preset_config(name: str, estimator: str | None = None) -> ControllerConfig:
+def _revision(revision: int) -> int:
+    if isinstance(revision, bool) or revision not in REVISIONS:
+        raise InvalidArgumentError(f"invalid preset revision {revision!r}; valid: "
+                                   f"{', '.join(map(str, REVISIONS))}")
+    return revision
+
+
+def _preset_config(name: str, estimator: str | None = None,
+                   revision: int = LATEST_REVISION) -> ControllerConfig:
     if name in AUTHORS_PRESETS:
         if estimator is not None:
             raise InvalidArgumentError(
@@ -125,6 +158,8 @@ def _preset_config(name: str, estimator: str | None = None) -> ControllerConfig:
                 "observer); valid: an estimator with preset default or paper")
         return authors_config(robot=name == "authors_real")
     config = ControllerConfig()
+    if name == "default" and REVISIONS[revision]:
+        config = apply_overrides(config, [f"{k}={v}" for k, v in REVISIONS[revision].items()])
     if name == "paper":
         config = revert_departures(config, DEPARTURES)
     elif name in ("keep_carried", "lift_watch"):
@@ -142,10 +177,11 @@ def revert_departures(config: ControllerConfig, keys: object) -> ControllerConfi
     return apply_overrides(config, [f"{key}={DEPARTURES[key]}" for key in keys])  # type: ignore[attr-defined]
 
 
-def preset_name(config: ControllerConfig) -> str:
-    """Name of the preset ``config`` equals field for field, else ``"custom"``."""
+def preset_name(config: ControllerConfig, revision: int = LATEST_REVISION) -> str:
+    """Name of the preset of ``revision`` that ``config`` equals field for field (the first
+    in ``PRESETS``: ``default`` before its equal ``keep_carried``), else ``"custom"``."""
     for name in PRESETS:
-        if _preset_config(name) == config:
+        if _preset_config(name, revision=_revision(revision)) == config:
             return name
     return CUSTOM
 

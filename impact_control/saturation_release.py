@@ -40,7 +40,8 @@ release and stays there until the gripper opens (which disarms the watch) or the
 ``tip_hold_s`` finite (off in every preset: it ended every press on the tuning seeds and
 lost 13-17 of 28 lifts from 7 kg up, docs/controller.md), some joint at its bound for that long
 in all since the close, before the lift is seen, stalls the lift too. With
-``spare_carried`` (on in ``keep_carried``, issue 54's preset, and in ``lift_watch``) the
+``spare_carried`` (on in ``default`` from preset revision 2, i.e. ``keep_carried``, issue 54's
+preset, and in ``lift_watch``; off in revision 1's ``default``) the
 saturation release above does not act once the lift is seen (a load the arm has lifted is
 carried, not let go, while the wrist is at its bound); the close arms the bookkeeping and
 the lift is seen whatever ``lift_watch_s`` is. Only the
@@ -93,7 +94,7 @@ class SaturationReleaseConfig:
         lift_force_min_n: The upward vertical feedforward [N, world z] from which the lift
             watch counts time.
         spare_carried: The saturation release does not act once the lift is seen since the
-            last close (False in ``default``).
+            last close (True in ``default`` since preset revision 2, False in revision 1).
         tip_hold_s: Tip test of the lift watch: the lift is stalled once some joint has
             been at its torque bound for this long in all (not necessarily without a break)
             since the close while the lift is not seen [s] (inf: no tip test, as in
@@ -109,7 +110,7 @@ class SaturationReleaseConfig:
     lift_watch_s: float = math.inf
     lift_min_m: float = 0.02
     lift_force_min_n: float = 10.0
-    spare_carried: bool = False
+    spare_carried: bool = True
     tip_hold_s: float = math.inf
 
     def __post_init__(self) -> None:

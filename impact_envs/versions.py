@@ -10,9 +10,15 @@ version here. ``-v0`` is retired rather than kept runnable: it named several beh
 The committed tables that ran ``-v0`` keep saying so (they ran some ``-v0``; run.json records
 the commit).
 
+``-v2`` (issue 59, 2026-12-02) makes the robot as imperfect as a real FR3 by default
+(``realism="fr3"``; HammerBasket keeps the authors' ideal robot) and the controller presets'
+revision 2 (``default`` = ``keep_carried``). ``-v1`` is not retired: it stays registered with
+everything that defines its behaviour pinned (``robot_realism``, ``preset_revision``), so a
+table recorded on ``-v1`` reproduces at HEAD, as Gymnasium keeps ``Ant-v4`` beside ``Ant-v5``.
+
 A checkpoint records the env its demonstrations were collected on (``meta.json``);
 ``checkpoints_from`` lists the versions whose checkpoints a version runs (the observation and
-action spaces are unchanged from v0 to v1).
+action spaces are unchanged from v0 to v2).
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ import re
 from dataclasses import dataclass
 
 from impact_control.errors import InvalidArgumentError
+from impact_control.presets import LATEST_REVISION
 
 NAMESPACE = "IMPACT"
 """The Gymnasium namespace of the built-in envs (LeRobot's is ``gym_impact``)."""
@@ -38,13 +45,24 @@ class Change:
 
 @dataclass(frozen=True)
 class EnvVersion:
-    """One registered version: its number, what it is, the changes it went through while it
-    was current (none for a pinned version), and the versions whose checkpoints it runs."""
+    """One version: its number, what it is, the changes it went through while it was current
+    (none for a pinned version), the versions whose checkpoints it runs, and what it pins.
+
+    Attributes:
+        robot_realism: The robot profile when ``RobotOptions.realism`` is not given
+            (``REALISMS``: ``"ideal"`` or ``"fr3"``).
+        preset_revision: The controller presets' revision its preset names resolve to
+            (``impact_control.presets.REVISIONS``).
+        retired: Refused by name (one line naming the current id) instead of registered.
+    """
 
     version: int
     summary: str
     changes: tuple[Change, ...] = ()
     checkpoints_from: tuple[int, ...] = ()
+    robot_realism: str = "ideal"
+    preset_revision: int = 1
+    retired: bool = False
 
 
 _SHARED_V0 = (
@@ -77,12 +95,28 @@ _DEFAULT_PRESET = Change(
     'from the paper-literal table (now controller_preset="paper", equal to the earlier '
     "defaults field for field) to the default preset")
 _V1 = EnvVersion(1, "the behaviour of the last v0, pinned under a new name (issue 41, "
-                 "2026-11-28)", checkpoints_from=(0, 1))
+                 "2026-11-28); kept registered beside v2 with the ideal robot and preset "
+                 "revision 1 pinned, so its tables reproduce (issue 59)",
+                 checkpoints_from=(0, 1))
+_V2 = EnvVersion(2, 'the robot as imperfect as a real FR3 by default (realism="fr3": '
+                 "torque-sensor offsets, an averaged dynamics model, a one-tick delay, "
+                 "quantized encoders; docs/sensing.md) and preset revision 2, whose default "
+                 "is keep_carried (a load the arm has lifted is not let go; issue 59, "
+                 "2026-12-02)", checkpoints_from=(0, 1, 2), robot_realism="fr3",
+                 preset_revision=2)
+_V2_BASKET = EnvVersion(2, "preset revision 2, whose default is keep_carried (issue 59, "
+                        "2026-12-02); the robot stays the authors' ideal one",
+                        checkpoints_from=(0, 1, 2), preset_revision=2)
+
+
+def _v0(*changes: Change) -> EnvVersion:
+    return EnvVersion(0, "initial release", changes, retired=True)
+
 
 VERSIONS: dict[str, tuple[EnvVersion, ...]] = {
-    "Hammer": (EnvVersion(0, "initial release", (_DEFAULT_PRESET, *_SHARED_V0)), _V1),
-    "Dumbbell": (EnvVersion(0, "initial release", (_DEFAULT_PRESET, *_SHARED_V0)), _V1),
-    "Calligraphy": (EnvVersion(0, "initial release", (
+    "Hammer": (_v0(_DEFAULT_PRESET, *_SHARED_V0), _V1, _V2),
+    "Dumbbell": (_v0(_DEFAULT_PRESET, *_SHARED_V0), _V1, _V2),
+    "Calligraphy": (_v0(
         Change("2026-11-22", "the normal-axis feedforward hold moved from the task into the "
                "controller (held from the last unmasked tick instead of the last tick the tip "
                "was > 5 mm above the paper); pressing engages with the commanded tip within "
@@ -90,16 +124,17 @@ VERSIONS: dict[str, tuple[EnvVersion, ...]] = {
         Change("2026-11-24", "while pressing, the learning mask freezes all three force axes "
                "(was: z only), and the default controller preset replaces the paper-literal "
                'one (controller_preset="paper")'),
-        *_SHARED_V0)), _V1),
-    "Disturbance": (EnvVersion(0, "initial release", (
+        *_SHARED_V0), _V1, _V2),
+    "Disturbance": (_v0(
         Change("2026-11-22", "the disturbance acts only while the trough is held"),
         Change("2026-11-24", "the default controller preset replaces the paper-literal one "
                '(controller_preset="paper")'),
-        *_SHARED_V0)), _V1),
-    "HammerBasket": (EnvVersion(0, "initial release (2026-11-27)", (
-        _SHARED_V0[-1],)), _V1),
+        *_SHARED_V0), _V1, _V2),
+    "HammerBasket": (EnvVersion(0, "initial release (2026-11-27)", (_SHARED_V0[-1],),
+                                retired=True), _V1, _V2_BASKET),
 }
-"""Each family's versions, oldest first; the last is the one registered."""
+"""Each family's versions, oldest first; the last is the current one, and every version not
+``retired`` is registered."""
 
 _ID = re.compile(r"^(?:(?P<module>[\w.]+):)?(?P<namespace>[\w]+)/(?P<family>\w+)-v(?P<v>\d+)$")
 
@@ -116,6 +151,25 @@ def current_id(family: str, namespace: str = NAMESPACE) -> str:
     return f"{namespace}/{family}-v{current_version(family)}"
 
 
+def registered(family: str) -> tuple[EnvVersion, ...]:
+    """The versions of ``family`` that are registered (every one not retired), oldest first."""
+    current_version(family)  # one line on an unknown family
+    return tuple(v for v in VERSIONS[family] if not v.retired)
+
+
+def version_info(family: str, version: int | None = None) -> EnvVersion:
+    """Version ``version`` of ``family`` (None: the current one); a one-line error naming
+    the registered versions for a retired or unknown one."""
+    kept = registered(family)
+    if version is None:
+        return kept[-1]
+    for v in kept:
+        if v.version == version and not isinstance(version, bool):
+            return v
+    raise InvalidArgumentError(f"invalid env_version {version!r} for {family}; valid: "
+                               f"{', '.join(str(v.version) for v in kept)}")
+
+
 def parse(env_id: str) -> tuple[str, int] | None:
     """(family, version) of a built-in env id (any namespace, optional ``module:``); None
     for another env."""
@@ -123,6 +177,24 @@ def parse(env_id: str) -> tuple[str, int] | None:
     if m is None or m["family"] not in VERSIONS:
         return None
     return m["family"], int(m["v"])
+
+
+def preset_revision(env_id: str) -> int:
+    """The controller presets' revision ``env_id`` runs (its version's ``preset_revision``;
+    the latest for an env outside the built-in families)."""
+    parsed = parse(env_id)
+    if parsed is None or retired(env_id) is not None:
+        return LATEST_REVISION
+    return version_info(*parsed).preset_revision
+
+
+def robot_realism(env_id: str) -> str:
+    """The robot profile ``env_id`` runs when ``RobotOptions.realism`` is unset (its version's
+    ``robot_realism``; ``"ideal"`` for an env outside the built-in families)."""
+    parsed = parse(env_id)
+    if parsed is None or retired(env_id) is not None:
+        return "ideal"
+    return version_info(*parsed).robot_realism
 
 
 def version_of(env_id: str) -> int | None:
@@ -134,12 +206,16 @@ def version_of(env_id: str) -> int | None:
 def retired(env_id: str) -> str | None:
     """The one-line refusal of a retired version of a built-in env, None otherwise."""
     parsed = parse(env_id)
-    if parsed is None or parsed[1] >= current_version(parsed[0]):
+    if parsed is None or not any(v.retired and v.version == parsed[1]
+                                 for v in VERSIONS[parsed[0]]):
         return None
     family, version = parsed
+    pinned = next(v.version for v in registered(family) if v.version > version)
+    then = env_id.replace(f"{family}-v{version}", f"{family}-v{pinned}")
     now = env_id.replace(f"{family}-v{version}", f"{family}-v{current_version(family)}")
+    also = "" if now == then else f", or {now}, the current version"
     return (f"{env_id} is retired (its behaviour changed under one name; "
-            f"impact_envs/versions.py); use {now}, the behaviour of the last -v{version}")
+            f"impact_envs/versions.py); use {then}, the behaviour of the last -v{version}{also}")
 
 
 def check_not_retired(env_id: str) -> None:

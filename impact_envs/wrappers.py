@@ -44,7 +44,7 @@ class RLActions(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
     """``Box(-1, 1)`` actions for an IMPACT env (see the module docstring).
 
     Args:
-        env: An IMPACT env (``gym.make("IMPACT/Hammer-v1", ...)``), possibly wrapped.
+        env: An IMPACT env (``gym.make("IMPACT/Hammer-v2", ...)``), possibly wrapped.
         mode: ``"absolute"`` or ``"delta"``.
         max_step_m: Largest translation of the target per step in ``"delta"`` mode [m].
         max_turn_rad: Largest rotation about each world axis per step in ``"delta"`` [rad].

@@ -184,7 +184,7 @@ def evaluate(
 
     Args:
         policy: The policy, or a factory of it (see ``PolicySource``).
-        env_id: A registered env id (``"IMPACT/Hammer-v1"``; ``"module:ID"`` imports module).
+        env_id: A registered env id (``"IMPACT/Hammer-v2"``; ``"module:ID"`` imports module).
         values: Parameter values, e.g. masses [kg]; each is one cell of ``episodes`` episodes.
             Or mass bins as ``(lo, hi)`` pairs [kg], ``[lo, hi)`` each: every episode draws
             its mass in its bin from its seed (``impact-eval --mass-bins``; the env's mass

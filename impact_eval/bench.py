@@ -200,7 +200,8 @@ def episode_cameras(args: argparse.Namespace) -> tuple[str, ...]:
 
 def main(argv: list[str] | None = None) -> None:
     parser = OneLineParser(prog="impact-bench", description=__doc__.splitlines()[0])
-    parser.add_argument("--env", default="IMPACT/Hammer-v1", choices=impact_envs.ENV_IDS)
+    parser.add_argument("--env", default=impact_envs.ENV_IDS[0],
+                        choices=impact_envs.REGISTERED_IDS)
     parser.add_argument("--steps", type=int, default=300, help="policy steps (30 Hz) per run")
     parser.add_argument("--mass", type=float, default=2.5, help="object mass [kg]")
     parser.add_argument("--seed", type=int, default=0)

@@ -13,7 +13,7 @@ import numpy as np
 
 from impact_control.errors import ImpactError, InvalidArgumentError
 from impact_control.presets import resolve_preset
-from impact_envs.versions import check_not_retired
+from impact_envs.versions import check_not_retired, preset_revision
 from impact_eval.grid import plain_number
 
 DEFAULT_PARAM_NAME = "object_mass"
@@ -91,7 +91,7 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
     extra: dict[str, object] = {}
     # A preset by its name (the env resolves it once, and run.json's env spec records the
     # name); with overrides, the resolved Preset, its name "custom" travelling with it.
-    resolved = resolve_preset(preset, overrides)
+    resolved = resolve_preset(preset, overrides, revision=preset_revision(env_id))
     if env_id.split(":")[-1].startswith("IMPACT/"):
         extra["terminate_on_success"] = True
         extra["controller_preset"] = resolved if overrides else resolved.name

@@ -62,6 +62,7 @@ from impact_control.controller import CONTROLLERS
 from impact_control.errors import InvalidArgumentError, check_choice
 from impact_control.presets import PRESETS
 from impact_envs.envs.options import ObservationOptions, RobotOptions, apply_robot_overrides
+from impact_envs.versions import robot_realism
 from impact_eval.checkpoints import (
     CHECKPOINTS_ENV_VAR,
     checkpoint_dir,
@@ -146,17 +147,18 @@ class MethodSpec:
         return (self.controller, self.preset, self.action_mode, self.observation_for(env_id),
                 self.robot)
 
-    @property
-    def settings(self) -> dict[str, object]:
+    def settings_for(self, env_id: str) -> dict[str, object]:
         """What ``run.json`` and ``identity.json`` record per method (``args.method_controllers``)
-        and ``--resume`` compares: controller, preset, warm; ``carry`` and ``robot`` only where
-        set, so that the records of runs made before they existed still match."""
+        and ``--resume`` compares on ``env_id``: controller, preset, warm; ``carry`` and
+        ``robot`` only where set, so that the records of runs made before they existed still
+        match. The robot is recorded as it runs there: an unset ``realism`` as the env
+        version's profile (``impact_envs/versions.py``)."""
         out: dict[str, object] = {"controller": self.controller, "preset": self.preset,
                                   "warm": self.warm}
         if self.carry:
             out["carry"] = True
         if self.robot is not None:
-            out["robot"] = asdict(self.robot)
+            out["robot"] = asdict(self.robot.with_default_realism(robot_realism(env_id)))
         return out
 
 

@@ -220,7 +220,7 @@ def prepare(spec: SweepSpec, options: RunOptions) -> Plan:
     previous = runinfo.read_run_json(options.out) if continuing else None
     identity = runinfo.RunIdentity(
         spec=spec, param_name=info.param_name,
-        method_controllers={m.name: m.settings for m in methods},
+        method_controllers={m.name: m.settings_for(spec.env_id) for m in methods},
         policy_fingerprints=_fingerprints(methods, info.env_id))
     if continuing:
         check_same_code(previous, runinfo.git_state(), options.allow_code_change)

@@ -200,7 +200,8 @@ def _with_later_robot_fields(setting: object) -> object:
         return setting
     from impact_envs.envs.options import RobotOptions
 
-    return {**setting, "robot": {**asdict(RobotOptions()), **setting["robot"]}}
+    before = {**asdict(RobotOptions()), "realism": "ideal"}  # the only robot before realism
+    return {**setting, "robot": {**before, **setting["robot"]}}
 
 
 def _check_controllers(was: object, now: dict[str, dict[str, object]]) -> None:

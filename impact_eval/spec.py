@@ -91,7 +91,7 @@ class SweepSpec:
     ``from_cli``, ``to_argv`` and ``--resume``'s check are generated from it. The values and
     bins are one composite option (``add_grid_arguments``)."""
 
-    env_id: str = option(Value("--env", "env id, e.g. IMPACT/Hammer-v1"))
+    env_id: str = option(Value("--env", "env id, e.g. IMPACT/Hammer-v2"))
     """As given (``IMPACT/Hammer-v1``; ``module:ID`` imports the module that registers it)."""
     methods: tuple[str, ...] = option(
         Value("--method", _method_help, parse=parse_method_list, show=",".join), resume="grow")
@@ -140,7 +140,7 @@ class SweepSpec:
             object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
         if not isinstance(self.env_id, str) or not self.env_id:
             raise InvalidArgumentError(f"invalid env id {self.env_id!r}; valid: a registered "
-                                       "env id, e.g. IMPACT/Hammer-v1")
+                                       "env id, e.g. IMPACT/Hammer-v2")
         parse_method_list(",".join(self.methods))  # empty or repeated names
         _at_least("--episodes", self.episodes, 1)
         _at_least("--seed", self.seed, 0)

@@ -11,11 +11,12 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from impact_control.errors import ImpactError, InvalidArgumentError
+from impact_envs.versions import current_id
 
 PROG = "impact-eval"
 
 QUICK_DEFAULTS = {
-    "env": "IMPACT/Hammer-v1",
+    "env": current_id("Hammer"),
     "grid": "0.2,2.5,5,7.5,10",
     "episodes": 4,
     "out": Path("results/quickstart"),

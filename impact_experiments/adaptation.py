@@ -237,7 +237,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         check_not_retired(args.env)  # a retired id: the line naming its current id
-        check_choice("env", args.env, impact_envs.ENV_IDS)
+        check_choice("env", args.env, impact_envs.REGISTERED_IDS)
         masses = tuple(float(m) for m in args.masses.split(","))
         check_masses(args.env, masses)
         if args.repeats < 1:

@@ -62,11 +62,13 @@ def save_strip(env_id: str, out: Path) -> Path:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("docs/img"))
-    parser.add_argument("--env", action="append", choices=impact_envs.ENV_IDS, default=None,
-                        help="only this env (repeatable; default: every registered env)")
+    parser.add_argument("--env", action="append", choices=impact_envs.REGISTERED_IDS, default=None,
+                        help="only this env (repeatable; default: the -v1 ids docs/gallery.md was "
+                        "recorded on)")
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
-    for env_id in args.env or impact_envs.ENV_IDS:
+    recorded = tuple(i for i in impact_envs.REGISTERED_IDS if i.endswith("-v1"))
+    for env_id in args.env or recorded:
         print(save_strip(env_id, args.out))
 
 

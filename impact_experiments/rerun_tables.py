@@ -1,16 +1,18 @@
-"""Rerun the reference tables of ``results/manifest.json`` on the current env versions
-(issue 41's single full rerun), resumably, one table after another.
+"""Rerun the reference tables of ``results/manifest.json`` recorded on a retired env version
+on the version that pins its behaviour (issue 41's single full rerun: ``-v0`` onto ``-v1``),
+resumably, one table after another.
 
     python -m impact_experiments.rerun_tables [TABLE ...] [--workers 2] [--python PY]
 
 For each table (default: every one in the manifest, in its order): the manifest's
-``sweep_args`` with a retired env id replaced by its current one (``impact_envs/versions.py``)
+``sweep_args`` with a retired env id replaced by the next registered one
+(``impact_envs/versions.py``)
 run as ``impact-eval ... --out results/.rerun/TABLE`` (``--resume`` when that directory
 already holds rows: a killed rerun continues). When the sweep completes, its directory
 replaces ``results/TABLE`` and ``impact-eval reproduce --record TABLE`` writes the manifest
-entry (with ``env_version``). A table whose entry already names its env's current version is
-skipped, so calling the script again goes on where it stopped. Files of the old directory
-that the sweep does not write (e.g. ``hammer_basket/authors_figure.md``) are listed for
+entry (with ``env_version``). A table whose entry already names a registered version (``-v1``
+or ``-v2``) is skipped, so calling the script again goes on where it stopped. Files of the old
+directory that the sweep does not write (e.g. ``hammer_basket/authors_figure.md``) are listed for
 regeneration. ``--python`` runs the sweeps with another interpreter (the LeRobot table needs
 the venv of tests/learn/lerobot_venv.sh).
 
@@ -31,7 +33,7 @@ from pathlib import Path
 
 from impact_control.cli import OneLineParser
 from impact_control.errors import ImpactError, InvalidArgumentError
-from impact_envs.versions import current_version, parse, retired
+from impact_envs.versions import parse, registered, retired
 from impact_eval.reproduce_manifest import load_manifest, positive_int
 
 RESULTS = Path(__file__).resolve().parents[1] / "results"
@@ -39,22 +41,24 @@ SCRATCH = ".rerun"
 
 
 def current_args(sweep_args: list[str]) -> list[str]:
-    """``sweep_args`` with a retired ``--env`` id replaced by the current one."""
+    """``sweep_args`` with a retired ``--env`` id replaced by the next registered version's
+    (the one that pinned its behaviour: ``-v0`` -> ``-v1``)."""
     args = list(sweep_args)
     i = args.index("--env") + 1
     parsed = parse(args[i])
     if parsed is not None and retired(args[i]):
         family, version = parsed
-        args[i] = args[i].replace(f"{family}-v{version}",
-                                  f"{family}-v{current_version(family)}")
+        pinned = next(v.version for v in registered(family) if v.version > version)
+        args[i] = args[i].replace(f"{family}-v{version}", f"{family}-v{pinned}")
     return args
 
 
 def is_current(entry: dict) -> bool:
-    """Whether a manifest entry was recorded on its env's current version."""
+    """Whether a manifest entry was recorded on a registered (not retired) env version."""
     env = entry["sweep_args"][entry["sweep_args"].index("--env") + 1]
     parsed = parse(env)
-    return parsed is None or entry.get("env_version") == current_version(parsed[0])
+    return parsed is None or entry.get("env_version") in {
+        v.version for v in registered(parsed[0])}
 
 
 def check_python(python: str) -> None:

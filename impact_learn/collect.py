@@ -183,7 +183,7 @@ def _store_batch(writer: ReplayWriter, target: int, batch: AttemptBatch,
 def build_parser() -> argparse.ArgumentParser:
     """Command-line interface of ``impact-collect``."""
     parser = OneLineParser(prog="impact-collect", description=__doc__.splitlines()[0])
-    parser.add_argument("--env", required=True, help="env id, e.g. IMPACT/Hammer-v1")
+    parser.add_argument("--env", required=True, help="env id, e.g. IMPACT/Hammer-v2")
     parser.add_argument("--out", required=True, help="output store (*.zarr)")
     parser.add_argument("--episodes", type=int, default=200, help="successful demos to keep")
     group = parser.add_mutually_exclusive_group()
@@ -229,7 +229,7 @@ def main(argv: list[str] | None = None) -> None:
         stored = collect(cfg)
     except gym.error.Error:
         parser.exit(2, f"impact-collect: error: unknown env {args.env!r}; valid: "
-                       f"{', '.join(impact_envs.ENV_IDS)}\n")
+                       f"{', '.join(impact_envs.REGISTERED_IDS)}\n")
     except ImpactError as exc:
         code = 1 if isinstance(exc, CollectionError) else 2  # a failed run, not bad input
         parser.exit(code, f"impact-collect: error: {exc}\n")

@@ -15,7 +15,7 @@ from numbers import Real
 from impact_control.controller import CONTROLLERS
 from impact_control.errors import InvalidArgumentError, check_choice
 from impact_control.presets import PRESETS
-from impact_envs import ENV_IDS, ObservationOptions
+from impact_envs import ENV_IDS, REGISTERED_IDS, ObservationOptions
 from impact_envs.tasks.base import Task, TaskParam
 from impact_envs.tasks.bins import mass_param_name
 from impact_envs.tasks.registry import task_class
@@ -24,8 +24,9 @@ from impact_envs.versions import check_not_retired
 GYM_NAMESPACE = "gym_impact"
 """LeRobot 0.4.4 makes ``gym_<type>/<task>``: the wrapped envs are registered under it."""
 ENV_NAMESPACE = "IMPACT"
-TASKS: tuple[str, ...] = tuple(env_id.split("/", 1)[1] for env_id in ENV_IDS)
-"""The plugin's tasks: one per built-in env (``Hammer-v1`` is ``IMPACT/Hammer-v1``)."""
+TASKS: tuple[str, ...] = tuple(env_id.split("/", 1)[1] for env_id in REGISTERED_IDS)
+"""The plugin's tasks: one per registered built-in env version (``Hammer-v2`` is
+``IMPACT/Hammer-v2``; the kept ``-v1`` ids too)."""
 OBS_MODES: tuple[str, ...] = ("state", "rgb", "state+rgb")
 """The observation modes ``impact-export-lerobot`` exports (``rgbd``'s depth images are not
 exported, docs/lerobot.md), so a policy trained on an export sees the same features here."""
@@ -47,7 +48,7 @@ class PluginSettings:
     """One ``impact`` env for LeRobot.
 
     Attributes:
-        task: One of ``TASKS`` (``Hammer-v1`` runs ``IMPACT/Hammer-v1``).
+        task: One of ``TASKS`` (``Hammer-v2``, the default, runs ``IMPACT/Hammer-v2``).
         controller: ``impact`` (IMPACT) or ``impedance`` (the plain impedance baseline).
         controller_preset: One of ``impact_control.presets.PRESETS``.
         object_mass: The mass [kg] of every episode (the task's ``mass_param``); None: the
@@ -60,7 +61,7 @@ class PluginSettings:
         episode_length: Policy steps per episode, at most the env's; None: the env's.
     """
 
-    task: str = "Hammer-v1"
+    task: str = ENV_IDS[0].split("/", 1)[1]
     controller: str = "impact"
     controller_preset: str = "default"
     object_mass: float | None = None

@@ -12,8 +12,10 @@ from typing import TypeVar
 
 from impact_control.controller import CONTROLLERS
 from impact_control.errors import InvalidArgumentError, check_choice
+from impact_control.presets import LATEST_REVISION
 from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.tasks.base import Task
+from impact_envs.versions import parse, version_info
 
 Options = TypeVar("Options", RobotOptions, RenderOptions, ObservationOptions)
 
@@ -33,6 +35,21 @@ def load_task(ref: str) -> Task:
     if not (isinstance(task_cls, type) and issubclass(task_cls, Task)):
         raise InvalidArgumentError(f"task {ref!r} is not a Task subclass")
     return task_cls()
+
+
+def version_pins(task: Task, env_version: int | None) -> tuple[str, int]:
+    """(robot profile when ``RobotOptions.realism`` is unset, controller preset revision) of
+    ``task``'s env at ``env_version`` (None: its current version; ``impact_envs/versions.py``).
+    A task outside the built-in families has one version: the ideal robot, the latest
+    revision."""
+    parsed = parse(task.env_id)
+    if parsed is None:
+        if env_version is not None:
+            raise InvalidArgumentError(f"invalid env_version {env_version!r} for "
+                                       f"{task.env_id}; valid: None (it has one version)")
+        return "ideal", LATEST_REVISION
+    pins = version_info(parsed[0], env_version)
+    return pins.robot_realism, pins.preset_revision
 
 
 def check_args(controller: str, reward_type: str, render_mode: str | None,

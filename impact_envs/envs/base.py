@@ -31,6 +31,7 @@ from impact_envs.envs.arguments import (
     initial_params,
     load_task,
     refuse_unknown_keywords,
+    version_pins,
 )
 from impact_envs.envs.carry import ControllerCarry, apply_carry, check_carry, controller_carry
 from impact_envs.envs.observation_space import state_space
@@ -86,6 +87,7 @@ class ImpactEnv(gym.Env):
         render: RenderOptions | Mapping[str, Any] | None = None,
         reward_type: str = "sparse",
         observation: ObservationOptions | Mapping[str, Any] | str | None = None,
+        env_version: int | None = None,
         **unknown: object,
     ) -> None:
         refuse_unknown_keywords(type(self), unknown)  # one line naming the valid keywords
@@ -93,13 +95,15 @@ class ImpactEnv(gym.Env):
                              if k not in ("self", "__class__", "unknown")}
         """The constructor's arguments (``__deepcopy__`` and pickling rebuild from them)."""
         check_args(controller, reward_type, render_mode, self.metadata["render_modes"])
-        preset = as_preset(controller_preset)  # resolved once, name and config together
+        self.task = task = self.make_task() if task is None else load_task(task)
+        profile, revision = version_pins(task, env_version)  # what the env's version pins
+        preset = as_preset(controller_preset, revision)  # resolved once, name and config
         robot, render, obs_opts = env_options(robot, render, observation)
+        robot = robot.with_default_realism(profile)
         self.reward_type, self.render_mode = reward_type, render_mode
         self.controller_mode = controller
         self.terminate_on_success = bool(terminate_on_success)
         self.persist_internal_model = bool(persist_internal_model)
-        self.task = task = self.make_task() if task is None else load_task(task)
         params = initial_params(task, object_mass, task_params)  # refused before building
         self.sim, self.dynamics, self.realism = build_robot(robot, task.scene_xml,
                                                             task.object_bodies, task.hand)

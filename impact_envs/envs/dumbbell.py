@@ -70,8 +70,11 @@ class DumbbellEnv(ImpactEnv):
 
     ## Version history
     In ``impact_envs/versions.py`` (``VERSIONS["Dumbbell"]``, the table in docs/envs.md), one
-    history for every env. v1: the behaviour of the last v0, pinned under a new name
-    (2026-11-28). v0: retired (it changed behaviour under one name; a one-line error names v1).
+    history for every env. v2 (current, 2026-12-02): the robot as imperfect as a real FR3
+    by default (``RobotOptions.realism`` unset means ``"fr3"``) and preset revision 2
+    (``default`` = ``keep_carried``). v1: the behaviour of the last v0 (2026-11-28), kept
+    registered with its ideal robot and preset revision 1 pinned, so its tables reproduce.
+    v0: retired (it changed behaviour under one name; a one-line error names v1).
     """
 
     @classmethod

@@ -66,7 +66,9 @@ class HammerEnv(ImpactEnv):
     estimator; reported as
     ``info["controller_preset"]``, a config as its preset's name or "custom"), ``robot``
     (``RobotOptions``: ``sensor_noise`` bool, ``grasp_force_n`` default 70 N,
-    ``model_mass_error`` relative error of the controller's link masses),
+    ``model_mass_error`` relative error of the controller's link masses, ``realism`` "fr3" |
+    "ideal", unset: the version's), ``env_version`` (set by the registered id: 2 for
+    ``-v2``, 1 for ``-v1``; None: the current version),
     ``persist_internal_model`` (keep the learned internal model across resets),
     ``terminate_on_success``, ``reward_type`` ("sparse" | "dense"), ``render_mode``
     ("rgb_array"), ``render`` (``RenderOptions``: ``width``, ``height``, ``camera``
@@ -77,8 +79,11 @@ class HammerEnv(ImpactEnv):
 
     ## Version history
     In ``impact_envs/versions.py`` (``VERSIONS["Hammer"]``, the table in docs/envs.md), one
-    history for every env. v1: the behaviour of the last v0, pinned under a new name
-    (2026-11-28). v0: retired (it changed behaviour under one name; a one-line error names v1).
+    history for every env. v2 (current, 2026-12-02): the robot as imperfect as a real FR3
+    by default (``RobotOptions.realism`` unset means ``"fr3"``) and preset revision 2
+    (``default`` = ``keep_carried``). v1: the behaviour of the last v0 (2026-11-28), kept
+    registered with its ideal robot and preset revision 1 pinned, so its tables reproduce.
+    v0: retired (it changed behaviour under one name; a one-line error names v1).
     """
 
     @classmethod

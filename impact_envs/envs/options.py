@@ -72,9 +72,11 @@ class RobotOptions:
               simulation). Encoder noise on q / dq is unchanged (``sensor_noise``). Joint
               damping and Coulomb friction then read as external forces to the estimator.
         realism: The robot profile, one of ``REALISMS`` (``robot/realism.py``,
-            docs/sensing.md "Realism profiles"): ``"ideal"`` (default; every result before
-            issue 39, bit for bit) or ``"fr3"`` (an averaged dynamics model, drifting
-            torque-sensor offsets, a one-tick delay, quantized encoders).
+            docs/sensing.md "Realism profiles"): ``"ideal"`` (every result before issue 39,
+            bit for bit) or ``"fr3"`` (an averaged dynamics model, drifting torque-sensor
+            offsets, a one-tick delay, quantized encoders). None (default): the env
+            version's (``impact_envs/versions.py``): ``"fr3"`` on the ``-v2`` envs,
+            ``"ideal"`` on ``-v1`` and on HammerBasket at every version.
         tau_offset_std_nm: One field of the profile (``Realism``'s attributes give units and
             meaning), as are the eight fields after it: ``tau_offset_drift_nm_per_sqrt_s``,
             ``model_link_mass_std``, ``model_com_std_m``, ``model_inertia_std``,
@@ -87,7 +89,7 @@ class RobotOptions:
     model_mass_error: float = 0.0
     torque_reading: str = "link_side"
     hand: str | None = None
-    realism: str = "ideal"
+    realism: str | None = None
     tau_offset_std_nm: float | None = None
     tau_offset_drift_nm_per_sqrt_s: float | None = None
     model_link_mass_std: float | None = None
@@ -110,13 +112,20 @@ class RobotOptions:
         _real("model_mass_error", self.model_mass_error, -0.9, 10.0, "")
         check_torque_reading(self.torque_reading)
 
-    def resolved_realism(self) -> Realism:
-        """The profile ``realism`` with this option's explicit fields on top."""
-        if not isinstance(self.realism, str):
+    def with_default_realism(self, profile: str) -> RobotOptions:
+        """These options with ``realism`` set to ``profile`` if it is unset (the env's version
+        chooses it)."""
+        return self if self.realism is not None else replace(self, realism=profile)
+
+    def resolved_realism(self, unset: str = "ideal") -> Realism:
+        """The profile ``realism`` (``unset`` if it is None) with this option's explicit
+        fields on top."""
+        profile = unset if self.realism is None else self.realism
+        if not isinstance(profile, str):
             raise InvalidArgumentError(
                 f"invalid realism {self.realism!r}; valid choices: {', '.join(REALISMS)}")
-        return Realism.resolve(self.realism, **{name: getattr(self, name)
-                                                for name in REALISM_FIELDS})
+        return Realism.resolve(profile, **{name: getattr(self, name)
+                                           for name in REALISM_FIELDS})
 
     def grasp(self, task_hand: str) -> tuple[str, float]:
         """``(hand, grasp force [N])`` on a task whose hand is ``task_hand``: this option's

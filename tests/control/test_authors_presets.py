@@ -58,7 +58,8 @@ def test_both_presets_carry_the_authors_values() -> None:
 
 
 def test_names_and_the_intended_variants_one_field_away() -> None:
-    assert [preset_name(preset_config(n)) for n in PRESETS] == list(PRESETS)
+    assert [preset_name(preset_config(n, revision=1), revision=1) for n in PRESETS] == (
+        list(PRESETS))
     assert set(PRESETS) >= {"authors_sim", "authors_real"}
     intended = apply_overrides(preset_config("authors_sim"), [
         "impedance.nullspace_damping_nms_per_rad=none", "payload.gripper_holdoff=true"])

@@ -9,6 +9,7 @@ import pytest
 from impact_control.config import ControllerConfig
 from impact_control.errors import InvalidArgumentError
 from impact_control.overrides import apply_overrides
+from impact_control.presets import preset_config
 
 
 def test_overrides_parse_by_field_type_and_leave_the_rest() -> None:
@@ -63,7 +64,13 @@ def test_make_env_applies_overrides_and_resume_refuses_other_overrides() -> None
     env = make_env("IMPACT/Hammer-v1", "impact", ("internal_model.slow_rate_max=1.5",))
     assert env.unwrapped.controller.config.internal_model.slow_rate_max == 1.5
     env.close()
-    plain = make_env("IMPACT/Hammer-v1", "impact")
+    plain = make_env("IMPACT/Hammer-v1", "impact")  # -v1: preset revision 1's default
+    assert plain.unwrapped.controller.config == preset_config("default", revision=1)
+    plain.close()
+    v1 = make_env("IMPACT/Hammer-v1", "impact", ("internal_model.slow_rate_max=1.5",))
+    assert not v1.unwrapped.controller.config.saturation_release.spare_carried  # overrides too
+    v1.close()
+    plain = make_env("IMPACT/Hammer-v2", "impact")
     assert plain.unwrapped.controller.config == ControllerConfig()
     plain.close()
     from impact_eval.spec import SweepSpec

@@ -48,11 +48,32 @@ def test_default_differs_from_paper_exactly_in_the_listed_departures() -> None:
     assert revert_departures(default, DEPARTURES) == paper
     for key in DEPARTURES:  # each revert alone changes exactly one field
         one = revert_departures(default, [key])
-        assert one != default and preset_name(one) == "custom"
+        # reverting spare_carried alone gives revision 1's default (the -v1 envs')
+        named = "default" if key == "saturation_release.spare_carried" else "custom"
+        assert one != default and preset_name(one, revision=1) == named
+
+
+def test_revisions_pin_default_and_only_default() -> None:
+    """Revision 1's default is the one the -v1 tables ran (spare_carried off); revision 2's
+    is keep_carried; every other preset is equal in both revisions."""
+    v1, v2 = preset_config("default", revision=1), preset_config("default", revision=2)
+    assert not v1.saturation_release.spare_carried and v2.saturation_release.spare_carried
+    assert v2 == ControllerConfig() == preset_config("keep_carried")
+    assert dataclasses.replace(v1, saturation_release=v2.saturation_release) == v2
+    for name in PRESETS[1:]:
+        assert preset_config(name, revision=1) == preset_config(name, revision=2), name
+    assert preset_name(v1) == "custom" and preset_name(v2, revision=1) == "keep_carried"
+    assert resolve_preset("default", revision=1).config == v1
+    with pytest.raises(InvalidArgumentError, match="valid: 1, 2"):
+        preset_config("default", revision=3)
 
 
 def test_preset_names_and_errors() -> None:
-    assert [preset_name(preset_config(n)) for n in PRESETS] == list(PRESETS)
+    # keep_carried equals the latest default (named default first); in revision 1 it differs
+    assert [preset_name(preset_config(n, revision=1), revision=1) for n in PRESETS] == (
+        list(PRESETS))
+    assert [preset_name(preset_config(n)) for n in PRESETS] == [
+        "default" if n == "keep_carried" else n for n in PRESETS]
     assert preset_name(apply_overrides(ControllerConfig(), ["slow_wrench.clip_force_n=3"])) == (
         "custom")
     with pytest.raises(InvalidArgumentError, match="valid choices: default, paper"):
@@ -72,11 +93,13 @@ def test_estimator_kind_is_chosen_on_the_preset() -> None:
         preset_config("default", estimator="kalman")
 
 
-def test_env_kwarg_selects_the_preset_and_info_reports_it() -> None:
+@pytest.mark.parametrize(("env_id", "revision"), [("IMPACT/Hammer-v1", 1),
+                                                  ("IMPACT/Hammer-v2", 2)])
+def test_env_kwarg_selects_the_preset_and_info_reports_it(env_id: str, revision: int) -> None:
     for name in PRESETS:
-        env = gym.make("IMPACT/Hammer-v1", controller_preset=name)
+        env = gym.make(env_id, controller_preset=name)
         _, info = env.reset(seed=0)
-        assert env.unwrapped.controller.config == preset_config(name)
+        assert env.unwrapped.controller.config == preset_config(name, revision=revision)
         assert info["controller_preset"] == name
         env.close()
     custom = apply_overrides(ControllerConfig(), ["internal_model.learning_rate=0.02"])
@@ -114,9 +137,10 @@ def test_warm_start_restores_weights_and_replay_at_every_reset() -> None:
 def test_issue_54_presets_are_default_plus_their_fields_only(name: str) -> None:
     from impact_control.presets import KEEP_CARRIED, LIFT_WATCH
 
+    # against revision 1's default (the one issue 54 added them to)
     fields = {"keep_carried": KEEP_CARRIED, "lift_watch": LIFT_WATCH}[name]
-    watch, default = preset_config(name), preset_config("default")
-    assert watch != default and preset_name(watch) == name
+    watch, default = preset_config(name), preset_config("default", revision=1)
+    assert watch != default and preset_name(watch, revision=1) == name
     assert apply_overrides(default, [f"{k}={v}" for k, v in fields.items()]) == watch
     assert dataclasses.replace(watch, saturation_release=default.saturation_release) == default
     assert default.saturation_release.lift_watch_s == float("inf")  # off in default
@@ -130,7 +154,8 @@ def test_a_preset_is_resolved_once_and_travels_with_its_name() -> None:
     tuned = resolve_preset("paper", ["internal_model.learning_rate=0.02"])
     assert tuned.name == "custom" and tuned.config.internal_model.learning_rate == 0.02
     # a bare config equal to a preset is named after it (users who build one themselves)
-    assert as_preset(preset_config("keep_carried")).name == "keep_carried"
+    assert as_preset(preset_config("paper")).name == "paper"
+    assert as_preset(preset_config("keep_carried"), revision=1).name == "keep_carried"
     assert as_preset(tuned) is tuned
     with pytest.raises(InvalidArgumentError, match="invalid controller_preset 'literal'"):
         resolve_preset("literal")

@@ -166,7 +166,7 @@ def test_every_robot_set_type_error_names_the_fields_type(field: str) -> None:
     ("model_mass_error=none", "invalid --robot-set model_mass_error='none'; valid: a number"),
     ("torque_reading=sensor", "valid choices: link_side, commanded"),
     ("hand=left_hand", "valid choices: franka_hand, authors_sim, none"),
-    ("realism=none", "invalid realism 'none'; valid choices: ideal, fr3"),
+    ("realism=perfect", "invalid realism 'perfect'; valid choices: ideal, fr3"),
 ])
 def test_robot_set_examples(setting: str, message: str) -> None:
     with pytest.raises(InvalidArgumentError) as err:

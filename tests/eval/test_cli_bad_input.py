@@ -55,7 +55,8 @@ CASES: dict[str, tuple[str, tuple[str, ...], str]] = {
         "pass --beyond-hardware-limits"),
     "eval report of a missing dir": ("report", ("{tmp}/nothing",), "nothing"),
     # impact-collect (base: one Hammer demo into {tmp}/x.zarr)
-    "collect unknown env": ("collect", ("--env", "Foo/Bar-v0"), "valid: IMPACT/Hammer-v1"),
+    "collect unknown env": ("collect", ("--env", "Foo/Bar-v0"),
+                            "valid: IMPACT/Hammer-v1, IMPACT/Hammer-v2"),
     "collect unknown controller": ("collect", ("--controller", "pid"),
                                    "valid choices: impedance, impact"),
     "collect malformed range": ("collect", ("--mass-range", "3"), "LO:HI"),

@@ -115,7 +115,7 @@ def test_quick_fills_defaults_and_explicit_options_win():
     from impact_eval.sweep_command import _with_defaults, sweep_parser
 
     args = _with_defaults(sweep_parser().parse_args(["--quick", "--episodes", "2"]))
-    assert args.env == "IMPACT/Hammer-v1" and args.grid == "0.2,2.5,5,7.5,10"
+    assert args.env == "IMPACT/Hammer-v2" and args.grid == "0.2,2.5,5,7.5,10"
     assert args.episodes == 2 and str(args.out) == "results/quickstart"
     assert args.method in ("scripted,scripted_impact,scripted_impact_paper",
                            "vanilla_dp,augmented_dp,impact,impact_paper")

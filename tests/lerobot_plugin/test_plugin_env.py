@@ -72,7 +72,7 @@ def test_every_task_steps_with_lerobot_keys(task: str) -> None:
 def test_image_mode_gives_pixels_per_camera() -> None:
     settings = PluginSettings(obs_mode="rgb", cameras=("wrist", "overview"), image_width=32,
                               image_height=24, episode_length=STEPS)
-    env = make_lerobot_env("Hammer-v1", settings)
+    env = make_lerobot_env("Hammer-v2", settings)
     obs, _ = env.reset(seed=SEED)
     ours = _ours(settings, [])[0]
     assert set(obs) == {"agent_pos", "pixels"} and list(obs["pixels"]) == ["overview", "wrist"]
@@ -89,7 +89,7 @@ def test_fixed_mass_and_mass_bin() -> None:
                                                               object_mass=0.7))
     assert fixed.reset(seed=SEED)[1]["tool_mass"] == 0.7
     fixed.close()
-    binned = make_lerobot_env("Hammer-v1", PluginSettings(mass_bin=(1.0, 2.0)))
+    binned = make_lerobot_env("Hammer-v2", PluginSettings(mass_bin=(1.0, 2.0)))
     masses = [binned.reset(seed=s)[1]["object_mass"] for s in (5, 6, 5)]
     assert masses == [draw_in_bin(1.0, 2.0, s) for s in (5, 6, 5)]  # impact-eval's draw
     assert masses[0] != masses[1] and all(1.0 <= m < 2.0 for m in masses)

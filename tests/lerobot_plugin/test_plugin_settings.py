@@ -7,7 +7,7 @@ import pytest
 from gymnasium.envs.registration import registry
 
 from impact_control.errors import InvalidArgumentError
-from impact_envs import ENV_IDS
+from impact_envs import ENV_IDS, REGISTERED_IDS
 from impact_envs.tasks.registry import task_class
 from impact_learn.lerobot_export import ACTION_NAMES
 from impact_lerobot import GYM_IDS, OBS_MODES, TASKS, PluginSettings, observation_plan
@@ -17,9 +17,11 @@ ROBOT_NAMES = ([f"ee_pos.{i}" for i in range(3)] + [f"ee_rot6d.{i}" for i in ran
 
 
 def test_tasks_and_gym_ids_cover_every_registered_env() -> None:
-    assert tuple(env_id.removeprefix("IMPACT/") for env_id in ENV_IDS) == TASKS
+    # every registered version (the kept -v1 tables ran gym_impact/Hammer-v1)
+    assert tuple(env_id.removeprefix("IMPACT/") for env_id in REGISTERED_IDS) == TASKS
+    assert set(ENV_IDS) < set(REGISTERED_IDS)
     assert tuple(f"gym_impact/{task}" for task in TASKS) == GYM_IDS
-    for gym_id, env_id in zip(GYM_IDS, ENV_IDS, strict=True):
+    for gym_id, env_id in zip(GYM_IDS, REGISTERED_IDS, strict=True):
         assert registry[gym_id].max_episode_steps == registry[env_id].max_episode_steps
         assert registry[gym_id].kwargs == {"task": gym_id.split("/")[1]}
 
@@ -27,16 +29,17 @@ def test_tasks_and_gym_ids_cover_every_registered_env() -> None:
 def test_defaults() -> None:
     s = PluginSettings()
     assert (s.task, s.controller, s.controller_preset, s.obs_mode) == (
-        "Hammer-v1", "impact", "default", "state")
+        "Hammer-v2", "impact", "default", "state")
     assert s.object_mass is None and s.mass_bin is None and s.episode_length is None
-    assert (s.env_id, s.gym_id, s.steps) == ("IMPACT/Hammer-v1", "gym_impact/Hammer-v1", 750)
+    assert (s.env_id, s.gym_id, s.steps) == ("IMPACT/Hammer-v2", "gym_impact/Hammer-v2", 750)
     assert PluginSettings(task="HammerBasket-v1", episode_length=40).steps == 40
     assert OBS_MODES == ("state", "rgb", "state+rgb")
 
 
 @pytest.mark.parametrize(("fields", "valid"), [
-    ({"task": "Nail-v0"}, "valid choices: Hammer-v1, Dumbbell-v1, Calligraphy-v1, "
-                          "Disturbance-v1, HammerBasket-v1"),
+    ({"task": "Nail-v0"}, "valid choices: Hammer-v1, Hammer-v2, Dumbbell-v1, Dumbbell-v2, "
+                          "Calligraphy-v1, Calligraphy-v2, Disturbance-v1, Disturbance-v2, "
+                          "HammerBasket-v1, HammerBasket-v2"),
     ({"controller": "pid"}, "valid choices: impedance, impact"),
     ({"controller_preset": "fast"},
      "valid choices: default, paper, keep_carried, lift_watch, authors_sim, authors_real"),

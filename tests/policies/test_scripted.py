@@ -71,7 +71,7 @@ def test_a_retired_id_names_its_current_version(family):
         assert f"use {env_id[:-1]}1" in str(err.value)
 
 
-@pytest.mark.parametrize("env_id", ["IMPACT/Hammer-v2", "IMPACT/Nope-v0", "Other/Hammer"])
+@pytest.mark.parametrize("env_id", ["IMPACT/Hammer-v3", "IMPACT/Nope-v0", "Other/Hammer"])
 def test_an_id_that_was_never_registered_is_still_not_a_registered_task(env_id):
     with pytest.raises(InvalidArgumentError, match="not a registered IMPACT task; valid: "
                                                    "IMPACT/Hammer-v1"):

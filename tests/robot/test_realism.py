@@ -35,7 +35,7 @@ def test_an_explicit_field_overrides_the_profile() -> None:
 
 @pytest.mark.parametrize(("options", "message"), [
     ({"realism": "real"}, "invalid realism 'real'; valid choices: ideal, fr3"),
-    ({"realism": None}, "invalid realism None; valid choices: ideal, fr3"),
+    ({"realism": 3}, "invalid realism 3; valid choices: ideal, fr3"),
     ({"delay_ticks": 2}, "invalid delay_ticks 2; valid: an integer from 0 to 1"),
     ({"delay_ticks": True}, "invalid delay_ticks True"),
     ({"tau_offset_std_nm": -0.1}, "invalid tau_offset_std_nm -0.1; valid: a number from 0"),
