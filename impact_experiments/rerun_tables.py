@@ -16,6 +16,13 @@ directory that the sweep does not write (e.g. ``hammer_basket/authors_figure.md`
 regeneration. ``--python`` runs the sweeps with another interpreter (the LeRobot table needs
 the venv of tests/learn/lerobot_venv.sh).
 
+``--to-version N`` (issue 59's single rerun) instead runs each named table on version ``N`` of
+its env into a twin, ``results/TABLE_vN``, recorded in the manifest beside the table it was
+rerun from, which stays as it is (``-v1`` stays registered and keeps reproducing); a twin
+already in the manifest is skipped.
+
+    python -m impact_experiments.rerun_tables --to-version 2 hammer_presets dumbbell_presets
+
 Bad input (an unknown table, ``--workers`` below 1, a ``--python`` that cannot import
 ``impact_eval``, a missing or damaged manifest) is one line, exit 2, before anything runs. A
 sweep or record that fails has printed its own line; the script exits with its exit code and
@@ -50,6 +57,19 @@ def current_args(sweep_args: list[str]) -> list[str]:
         family, version = parsed
         pinned = next(v.version for v in registered(family) if v.version > version)
         args[i] = args[i].replace(f"{family}-v{version}", f"{family}-v{pinned}")
+    return args
+
+
+def version_args(sweep_args: list[str], version: int) -> list[str]:
+    """``sweep_args`` with the ``--env`` id of a built-in env at ``version`` (one line for
+    another env or a version that is not registered)."""
+    args = list(sweep_args)
+    i = args.index("--env") + 1
+    parsed = parse(args[i])
+    if parsed is None or version not in {v.version for v in registered(parsed[0])}:
+        raise InvalidArgumentError(f"--to-version {version}: {args[i]} has no registered "
+                                   f"version {version}")
+    args[i] = args[i].replace(f"{parsed[0]}-v{parsed[1]}", f"{parsed[0]}-v{version}")
     return args
 
 
@@ -93,10 +113,15 @@ def _child(argv: list[str]) -> None:
         raise ChildError(code if code > 0 else 128 - code)  # killed by a signal: 128 + it
 
 
-def rerun(table: str, entry: dict, results: Path, workers: int, python: str) -> None:
-    """Run one table into its scratch directory, then swap it in and record it."""
+def rerun(table: str, entry: dict, results: Path, workers: int, python: str,
+          to_version: int | None = None) -> None:
+    """Run one table into its scratch directory, then swap it in and record it (with
+    ``to_version``: its twin ``TABLE_vN`` on that version, the table left as it is)."""
+    sweep_args = current_args(entry["sweep_args"])
+    if to_version is not None:
+        sweep_args, table = version_args(sweep_args, to_version), f"{table}_v{to_version}"
     scratch = results / SCRATCH / table
-    argv = [python, "-m", "impact_eval", *current_args(entry["sweep_args"]),
+    argv = [python, "-m", "impact_eval", *sweep_args,
             "--out", str(scratch), "--workers", str(workers)]
     if (scratch / "episodes.csv").is_file():
         argv.append("--resume")
@@ -108,9 +133,10 @@ def rerun(table: str, entry: dict, results: Path, workers: int, python: str) -> 
                                    f"{results / table} is kept")
     target = results / table
     written = {p.relative_to(scratch) for p in scratch.rglob("*") if p.is_file()}
-    stale = sorted(str(p.relative_to(target)) for p in target.rglob("*")
+    stale = sorted(str(p.relative_to(target)) for p in target.rglob("*")  # none for a twin
                    if p.is_file() and p.relative_to(target) not in written)
-    shutil.rmtree(target)
+    if target.exists():
+        shutil.rmtree(target)
     shutil.move(str(scratch), str(target))
     _child([python, "-m", "impact_eval", "reproduce", "--record", table,
             *(["--results", str(results)] if results != RESULTS else [])])
@@ -136,14 +162,22 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workers", type=positive_int, default=2)
     p.add_argument("--python", default=sys.executable, help="interpreter of the sweeps")
     p.add_argument("--results", type=Path, default=RESULTS)
+    p.add_argument("--to-version", type=positive_int, default=None,
+                   help="rerun the tables on this env version into twins TABLE_vN")
     a = p.parse_args(argv)
     try:
         for table in _tables(p, a):
-            entry = load_manifest(a.results)["tables"][table]
-            if is_current(entry):
-                print(f"{table}: already on the current version, skipped", flush=True)
+            tables = load_manifest(a.results)["tables"]
+            entry = tables[table]
+            if a.to_version is not None:
+                version_args(entry["sweep_args"], a.to_version)  # one line before it runs
+                if f"{table}_v{a.to_version}" in tables:
+                    print(f"{table}_v{a.to_version}: already recorded, skipped", flush=True)
+                    continue
+            elif is_current(entry):
+                print(f"{table}: already on a registered version, skipped", flush=True)
                 continue
-            rerun(table, entry, a.results, a.workers, a.python)
+            rerun(table, entry, a.results, a.workers, a.python, a.to_version)
     except ChildError as exc:
         return exc.code
     except KeyboardInterrupt:

@@ -136,3 +136,38 @@ def test_a_sweep_that_writes_no_rows_keeps_the_table(tmp_path, capfd) -> None:
     assert line == (f"rerun_tables: error: the sweep of t wrote no "
                     f"{results / '.rerun' / 't' / 'episodes.csv'}; {results / 't'} is kept")
     assert _files(results) == before
+
+
+def test_to_version_reruns_a_table_into_its_twin_and_leaves_the_table(tmp_path, capfd) -> None:
+    """issue 59: ``--to-version 2`` runs the table's command on -v2 into ``t_v2`` and records
+    it; ``t`` stays byte for byte; a twin already in the manifest is skipped; a version the
+    env does not register is one line before anything runs."""
+    import json
+
+    from impact_experiments.rerun_tables import main, version_args
+
+    results = _results(tmp_path)
+    manifest = json.loads((results / "manifest.json").read_text())
+    manifest["tables"]["t"]["sweep_args"][1] = "IMPACT/Hammer-v1"
+    (results / "manifest.json").write_text(json.dumps(manifest))
+    assert version_args(["--env", "IMPACT/Hammer-v1", "--seed", "0"], 2) == [
+        "--env", "IMPACT/Hammer-v2", "--seed", "0"]
+    line = _refused(capfd, ["--to-version", "3", "--results", str(results),
+                            "--python", str(_fake_python(tmp_path, "exit 0"))])
+    assert line.endswith("IMPACT/Hammer-v1 has no registered version 3")
+    before = _files(results / "t")
+    # the fake sweep writes rows where --out points; the fake record adds the twin's entry
+    sweep = ('if [ "$3" = "reproduce" ]; then python3 -c "import json,sys; p=sys.argv[1]; '
+             "m=json.load(open(p)); m['tables']['t_v2']={'sweep_args': []}; "
+             'json.dump(m, open(p, \'w\'))" ' + str(results / "manifest.json") + '; exit 0; fi\n'
+             'for a in "$@"; do [ "$prev" = "--out" ] && out=$a; prev=$a; done\n'
+             'echo "$@" > /dev/null; mkdir -p "$out" && echo "method\\nx" > "$out/episodes.csv"')
+    python = _fake_python(tmp_path, sweep)
+    assert main(["--to-version", "2", "t", "--python", str(python),
+                 "--results", str(results)]) == 0
+    out = capfd.readouterr().out
+    assert "IMPACT/Hammer-v2" in out and (results / "t_v2" / "episodes.csv").is_file()
+    assert _files(results / "t") == before
+    assert main(["--to-version", "2", "t", "--python", str(python),
+                 "--results", str(results)]) == 0
+    assert "t_v2: already recorded, skipped" in capfd.readouterr().out
