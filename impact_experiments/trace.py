@@ -13,6 +13,8 @@ counts, per joint, the policy steps whose final torque sat at the FR3 limit (87 
 The traces quoted in docs/results.md come from this command. Calligraphy adds the writing
 summary (force in band, stroke RMS) on the last line.
 ``--robot-set FIELD=VALUE`` changes the robot as in impact-eval (e.g. ``realism=fr3``).
+``--full`` runs the episode to its step limit instead of stopping at the first success, and
+adds the success test of each printed step (``succ``; HammerBasket judges success at the end).
 ``--no-joint-friction`` zeroes the arm joints' Coulomb friction in the simulated plant (an
 ablation of the robot, not of the controller), to see what the friction dead-band costs.
 """
@@ -58,8 +60,9 @@ def start_episode(env, policy, value: float, seed: int) -> dict:
 
 def trace(env_id: str, method: str, value: float, seed: int, every: int,
           overrides: Sequence[str] = (), joint_friction: bool = True,
-          robot_overrides: Sequence[str] = ()) -> list[str]:
-    """Run one episode (until success or the step limit); return the printed lines."""
+          robot_overrides: Sequence[str] = (), full: bool = False) -> list[str]:
+    """Run one episode (until success, or with ``full`` the step limit); return the printed
+    lines."""
     env, policy = open_method(env_id, method, overrides, robot_overrides)
     limit = np.asarray(env.unwrapped.controller.config.limits.torque_max_nm)
     saturated = np.zeros(len(limit), dtype=int)
@@ -68,11 +71,11 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
         sim = env.unwrapped.sim
         sim.model.dof_frictionloss[sim.arm_dof] = 0.0
     obs = start_episode(env, policy, value, seed)
-    lines, step, done = [HEADER], 0, False
+    lines, step, done = [HEADER + ("  succ" if full else "")], 0, False
     while not done:
         action = np.asarray(policy.act(stack_obs([obs]))[0])
         obs, _, terminated, truncated, info = env.step(action)
-        done = terminated or truncated or bool(info["is_success"])
+        done = terminated or truncated or (not full and bool(info["is_success"]))
         saturated += np.abs(info["tau_nm"]) >= limit - 0.05
         if step % every == 0 or done:
             lines.append(
@@ -80,7 +83,8 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
                 f"{obs['object_pos'][2]:6.3f} {info['wrench_pred_world'][2]:7.1f} "
                 f"{info['wrench_slow_world'][2]:7.1f} {info['wrench_ext_world'][2]:7.1f} "
                 f"{int(info['gate_open']):5d} {release.scale:6.2f} "
-                f"{info['peak_robot_contact_force_n']:7.1f}")
+                f"{info['peak_robot_contact_force_n']:7.1f}"
+                + (f" {int(info['is_success']):5d}" if full else ""))
         step += 1
     end = (f"success: {bool(info['is_success'])} after {step} steps; steps ending at a joint "
            f"torque limit, joints 1-7: {saturated.tolist()}")
@@ -104,6 +108,8 @@ def main(argv: list[str] | None = None) -> None:
                         metavar="SECTION.FIELD=VALUE", help="as impact-eval --controller-set")
     parser.add_argument("--no-joint-friction", action="store_true",
                         help="zero the arm joints' Coulomb friction in the simulated plant")
+    parser.add_argument("--full", action="store_true",
+                        help="run to the step limit, not to the first success")
     add_robot_set(parser)
     args = parser.parse_args(argv)
     if args.every < 1:
@@ -111,7 +117,7 @@ def main(argv: list[str] | None = None) -> None:
     try:
         lines = trace(args.env, args.method, args.value, args.seed, args.every,
                       args.controller_set, joint_friction=not args.no_joint_friction,
-                      robot_overrides=args.robot_set)
+                      robot_overrides=args.robot_set, full=args.full)
     except ImpactError as exc:  # unknown env / method, bad value, missing checkpoint
         print(f"{parser.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise SystemExit(2) from None
