@@ -13,6 +13,11 @@ run with the full one's ``--seed``; it may hold fewer episodes per cell). Prints
 the pairs, the outcome flips (any flip fails the check: exit 1), how many episodes ended early
 and the steps saved, and the largest change of each summed or peaked column, the columns that
 cover only the steps run. ``--out FILE.json`` keeps it.
+
+Both tables must have run on the same CPU model (run.json's ``host.cpu_model``): across CPU
+families an outcome may flip with the flag off too (docs/results.md, "Reproducibility"), so a
+flip there says nothing about the flag. Tables of two CPUs are refused in one line (exit 2)
+naming how to rerun the full-length cells here; ``--across-cpus`` pairs them anyway.
 """
 
 from __future__ import annotations
@@ -47,6 +52,27 @@ def paired(full: pd.DataFrame, early: pd.DataFrame) -> pd.DataFrame:
     return both
 
 
+def recorded_cpu(table: Path) -> str | None:
+    """The CPU model a table's run.json records (``host.cpu_model``); None when unrecorded."""
+    try:
+        run = json.loads((table / "run.json").read_text())
+    except (OSError, ValueError):
+        return None
+    host = run.get("host") if isinstance(run, dict) else None
+    return host.get("cpu_model") if isinstance(host, dict) else None
+
+
+def check_same_cpu(full: Path, early: Path) -> None:
+    """Raise ``ValueError`` (one line) if the two tables record different CPU models."""
+    cpus = recorded_cpu(full), recorded_cpu(early)
+    if None not in cpus and cpus[0] != cpus[1]:
+        raise ValueError(
+            f"the tables ran on different CPUs ({cpus[0]}: {full}; {cpus[1]}: {early}), where "
+            "outcomes may flip without the flag; rerun the full-length cells on this CPU "
+            "(impact-eval reproduce --check TABLE --cells ... --out DIR) and pass --full DIR, "
+            "or pass --across-cpus")
+
+
 def summary(both: pd.DataFrame, full_length: int) -> dict[str, object]:
     """Per method and in total: pairs, outcome flips, early ends and steps saved, and the
     largest absolute change of each covered column."""
@@ -72,10 +98,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--full", type=Path, required=True, help="the full-length table")
     parser.add_argument("--early", type=Path, required=True, help="the --end-early table")
     parser.add_argument("--out", type=Path, help="write the summary as JSON")
+    parser.add_argument("--across-cpus", action="store_true",
+                        help="pair tables recorded on different CPU models anyway")
     args = parser.parse_args(argv)
     full = pd.read_csv(args.full / "episodes.csv", keep_default_na=False)
     early = pd.read_csv(args.early / "episodes.csv", keep_default_na=False)
     try:
+        if not args.across_cpus:
+            check_same_cpu(args.full, args.early)
         both = paired(full, early)
     except ValueError as exc:
         parser.exit(2, f"end_early_check: error: {exc}\n")

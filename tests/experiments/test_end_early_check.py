@@ -43,3 +43,21 @@ def test_a_flip_fails_and_an_unpaired_row_is_one_line(tmp_path: Path, capsys) ->
     with pytest.raises(SystemExit) as exc:
         main(["--full", str(full), "--early", str(stray)])
     assert exc.value.code == 2 and "no full-length twin" in capsys.readouterr().err
+
+
+def test_tables_of_two_cpus_are_refused_in_one_line(tmp_path: Path, capsys) -> None:
+    """An outcome may flip across CPU families with the flag off: such a pairing proves
+    nothing, so it is refused unless --across-cpus is given."""
+    import json
+
+    full = _table(tmp_path / "full", [("a", 1.0, 0, 1, 1800)])
+    early = _table(tmp_path / "early", [("a", 1.0, 0, 1, 700)])
+    for table, cpu in ((full, "Intel(R) Xeon(R) Processor"), (early, "AMD EPYC")):
+        (table / "run.json").write_text(json.dumps({"host": {"cpu_model": cpu}}))
+    with pytest.raises(SystemExit) as exc:
+        main(["--full", str(full), "--early", str(early)])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1 and "different CPUs" in err
+    assert main(["--full", str(full), "--early", str(early), "--across-cpus"]) == 0
+    (full / "run.json").write_text(json.dumps({"host": {"cpu_model": "AMD EPYC"}}))
+    assert main(["--full", str(full), "--early", str(early)]) == 0
