@@ -18,6 +18,8 @@ Both tables must have run on the same CPU model (run.json's ``host.cpu_model``):
 families an outcome may flip with the flag off too (docs/results.md, "Reproducibility"), so a
 flip there says nothing about the flag. Tables of two CPUs are refused in one line (exit 2)
 naming how to rerun the full-length cells here; ``--across-cpus`` pairs them anyway.
+``--twins-only`` pairs the early rows that have a twin and leaves out the others (a full
+table rerun here for some cells only: ``results/hammer_basket_diag/end_early_full_here``).
 """
 
 from __future__ import annotations
@@ -35,15 +37,19 @@ COVERED = ("energy_j", "peak_torque_nm", "peak_contact_force_n", "peak_contact_s
 """Columns over the steps an episode ran (docs/eval.md, "Ending an episode early")."""
 
 
-def paired(full: pd.DataFrame, early: pd.DataFrame) -> pd.DataFrame:
-    """The early rows joined to their full-length twins (suffixes ``_full``, ``_early``).
+def paired(full: pd.DataFrame, early: pd.DataFrame, twins_only: bool = False) -> pd.DataFrame:
+    """The early rows joined to their full-length twins (suffixes ``_full``, ``_early``);
+    with ``twins_only``, early rows without a twin are left out instead of refused.
 
     Raises:
-        ValueError: an early row has no twin, or the twins' seeds differ.
+        ValueError: an early row has no twin (without ``twins_only``), or the twins' seeds
+            differ.
     """
     both = early.merge(full, on=list(KEYS), how="left", suffixes=("_early", "_full"),
                        validate="one_to_one")
     missing = both["seed_full"].isna()
+    if twins_only:
+        both, missing = both[~missing], missing[~missing]
     if missing.any():
         raise ValueError(f"{int(missing.sum())} early rows have no full-length twin "
                          f"(first: {both.loc[missing, list(KEYS)].iloc[0].to_dict()})")
@@ -100,13 +106,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, help="write the summary as JSON")
     parser.add_argument("--across-cpus", action="store_true",
                         help="pair tables recorded on different CPU models anyway")
+    parser.add_argument("--twins-only", action="store_true",
+                        help="leave out early rows that have no full-length twin")
     args = parser.parse_args(argv)
     full = pd.read_csv(args.full / "episodes.csv", keep_default_na=False)
     early = pd.read_csv(args.early / "episodes.csv", keep_default_na=False)
     try:
         if not args.across_cpus:
             check_same_cpu(args.full, args.early)
-        both = paired(full, early)
+        both = paired(full, early, args.twins_only)
     except ValueError as exc:
         parser.exit(2, f"end_early_check: error: {exc}\n")
     result = summary(both, int(full["length"].max()))

@@ -43,6 +43,8 @@ def test_a_flip_fails_and_an_unpaired_row_is_one_line(tmp_path: Path, capsys) ->
     with pytest.raises(SystemExit) as exc:
         main(["--full", str(full), "--early", str(stray)])
     assert exc.value.code == 2 and "no full-length twin" in capsys.readouterr().err
+    mixed = _table(tmp_path / "mixed", [("a", 1.0, 0, 0, 700), ("b", 1.0, 0, 1, 700)])
+    assert main(["--full", str(full), "--early", str(mixed), "--twins-only"]) == 0
 
 
 def test_tables_of_two_cpus_are_refused_in_one_line(tmp_path: Path, capsys) -> None:
