@@ -102,3 +102,27 @@ def test_v1_runs_checkpoints_trained_on_v0_of_its_own_family_only() -> None:
 
 def test_the_docs_table_is_the_history() -> None:
     assert history_markdown() in DOCS.read_text()
+
+
+def test_the_hammer_basket_authors_methods_run_the_same_on_v1_and_v2() -> None:
+    """HammerBasket-v2 changes only what "default" resolves to; no method of the table of
+    their baselines (results/hammer_basket_authors) runs it, so each builds the same controller
+    and robot on both versions (issue 59: that table needs no -v2 rerun)."""
+    import json
+
+    from impact_eval.envs import make_env
+    from impact_eval.methods import resolve_method
+
+    manifest = json.loads((DOCS.parents[1] / "results" / "manifest.json").read_text())
+    args = manifest["tables"]["hammer_basket_authors"]["sweep_args"]
+    for name in args[args.index("--method") + 1].split(","):
+        spec = resolve_method(name)
+        assert spec.preset != "default", name
+        built = []
+        for version in (1, 2):
+            env = make_env(f"IMPACT/HammerBasket-v{version}", spec.controller, (), spec.preset,
+                           robot=spec.robot).unwrapped
+            built.append((env.controller.config, env.robot_profile, env.realism,
+                          env.controller_preset))
+            env.close()
+        assert built[0] == built[1], name
