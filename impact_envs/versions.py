@@ -179,22 +179,44 @@ def parse(env_id: str) -> tuple[str, int] | None:
     return m["family"], int(m["v"])
 
 
-def preset_revision(env_id: str) -> int:
-    """The controller presets' revision ``env_id`` runs (its version's ``preset_revision``;
-    the latest for an env outside the built-in families)."""
+OTHER_ENV_PINS = ("ideal", LATEST_REVISION)
+"""(robot profile, preset revision) of an env outside the built-in families: it has one
+version, the ideal robot and the latest presets."""
+
+
+def pins(family: str | None, version: int | None = None) -> tuple[str, int]:
+    """(robot profile when ``RobotOptions.realism`` is unset, controller preset revision) of
+    ``family`` at ``version`` (None: the current one; ``family`` None: ``OTHER_ENV_PINS``).
+    A retired or unknown version is a one-line error naming the registered ones."""
+    if family is None:
+        return OTHER_ENV_PINS
+    v = version_info(family, version)
+    return v.robot_realism, v.preset_revision
+
+
+def pins_of(env_id: str) -> tuple[str, int]:
+    """``pins`` of an env id (``OTHER_ENV_PINS`` for another env or a retired id, which is
+    refused in its own line where it is made)."""
     parsed = parse(env_id)
     if parsed is None or retired(env_id) is not None:
-        return LATEST_REVISION
-    return version_info(*parsed).preset_revision
+        return OTHER_ENV_PINS
+    return pins(*parsed)
+
+
+def preset_revision(env_id: str) -> int:
+    """The controller presets' revision ``env_id`` runs (``pins_of``)."""
+    return pins_of(env_id)[1]
 
 
 def robot_realism(env_id: str) -> str:
-    """The robot profile ``env_id`` runs when ``RobotOptions.realism`` is unset (its version's
-    ``robot_realism``; ``"ideal"`` for an env outside the built-in families)."""
-    parsed = parse(env_id)
-    if parsed is None or retired(env_id) is not None:
-        return "ideal"
-    return version_info(*parsed).robot_realism
+    """The robot profile ``env_id`` runs when ``RobotOptions.realism`` is unset (``pins_of``)."""
+    return pins_of(env_id)[0]
+
+
+def pinned_by(family: str, version: int) -> int:
+    """The first registered version after ``version``: the one that pins a retired version's
+    behaviour (``-v0`` -> ``-v1``)."""
+    return next(v.version for v in registered(family) if v.version > version)
 
 
 def version_of(env_id: str) -> int | None:
@@ -210,8 +232,7 @@ def retired(env_id: str) -> str | None:
                                  for v in VERSIONS[parsed[0]]):
         return None
     family, version = parsed
-    pinned = next(v.version for v in registered(family) if v.version > version)
-    then = env_id.replace(f"{family}-v{version}", f"{family}-v{pinned}")
+    then = env_id.replace(f"{family}-v{version}", f"{family}-v{pinned_by(family, version)}")
     now = env_id.replace(f"{family}-v{version}", f"{family}-v{current_version(family)}")
     also = "" if now == then else f", or {now}, the current version"
     return (f"{env_id} is retired (its behaviour changed under one name; "

@@ -40,7 +40,7 @@ from pathlib import Path
 
 from impact_control.cli import OneLineParser
 from impact_control.errors import ImpactError, InvalidArgumentError
-from impact_envs.versions import parse, registered, retired
+from impact_envs.versions import parse, pinned_by, registered, retired
 from impact_eval.reproduce_manifest import load_manifest, positive_int
 
 RESULTS = Path(__file__).resolve().parents[1] / "results"
@@ -55,8 +55,8 @@ def current_args(sweep_args: list[str]) -> list[str]:
     parsed = parse(args[i])
     if parsed is not None and retired(args[i]):
         family, version = parsed
-        pinned = next(v.version for v in registered(family) if v.version > version)
-        args[i] = args[i].replace(f"{family}-v{version}", f"{family}-v{pinned}")
+        args[i] = args[i].replace(f"{family}-v{version}",
+                                  f"{family}-v{pinned_by(family, version)}")
     return args
 
 

@@ -12,10 +12,10 @@ from typing import TypeVar
 
 from impact_control.controller import CONTROLLERS
 from impact_control.errors import InvalidArgumentError, check_choice
-from impact_control.presets import LATEST_REVISION
+from impact_control.presets import Preset, as_preset
 from impact_envs.envs.options import ObservationOptions, RenderOptions, RobotOptions
 from impact_envs.tasks.base import Task
-from impact_envs.versions import parse, version_info
+from impact_envs.versions import parse, pins
 
 Options = TypeVar("Options", RobotOptions, RenderOptions, ObservationOptions)
 
@@ -39,17 +39,25 @@ def load_task(ref: str) -> Task:
 
 def version_pins(task: Task, env_version: int | None) -> tuple[str, int]:
     """(robot profile when ``RobotOptions.realism`` is unset, controller preset revision) of
-    ``task``'s env at ``env_version`` (None: its current version; ``impact_envs/versions.py``).
-    A task outside the built-in families has one version: the ideal robot, the latest
-    revision."""
+    ``task``'s env at ``env_version`` (None: its current version; ``versions.pins``). A task
+    outside the built-in families has one version (``env_version`` must be None)."""
     parsed = parse(task.env_id)
-    if parsed is None:
-        if env_version is not None:
-            raise InvalidArgumentError(f"invalid env_version {env_version!r} for "
-                                       f"{task.env_id}; valid: None (it has one version)")
-        return "ideal", LATEST_REVISION
-    pins = version_info(parsed[0], env_version)
-    return pins.robot_realism, pins.preset_revision
+    if parsed is None and env_version is not None:
+        raise InvalidArgumentError(f"invalid env_version {env_version!r} for {task.env_id}; "
+                                   "valid: None (it has one version)")
+    return pins(None if parsed is None else parsed[0], env_version)
+
+
+def pinned_options(task: Task, env_version: int | None, controller_preset: object,
+                   robot: object, render: object, observation: object
+                   ) -> tuple[Preset, RobotOptions, RenderOptions, ObservationOptions]:
+    """The env's preset and option arguments resolved as its version pins them
+    (``version_pins``): the preset at the version's revision, an unset robot profile as the
+    version's."""
+    profile, revision = version_pins(task, env_version)
+    preset = as_preset(controller_preset, revision)  # type: ignore[arg-type]
+    robot_opts, render_opts, obs_opts = env_options(robot, render, observation)
+    return preset, robot_opts.with_default_realism(profile), render_opts, obs_opts
 
 
 def check_args(controller: str, reward_type: str, render_mode: str | None,

@@ -22,16 +22,15 @@ from impact_control.controller import ImpactController
 from impact_control.errors import InvalidArgumentError
 from impact_control.internal_model import ModelSnapshot
 from impact_control.lie import matrix_from_rot6d, matrix_to_quat, rot6d_from_matrix, slerp
-from impact_control.presets import Preset, as_preset
+from impact_control.presets import Preset
 from impact_control.rates import CONTROL_HZ, POLICY_HZ
 from impact_envs._gl import make_renderer
 from impact_envs.envs.arguments import (
     check_args,
-    env_options,
     initial_params,
     load_task,
+    pinned_options,
     refuse_unknown_keywords,
-    version_pins,
 )
 from impact_envs.envs.carry import ControllerCarry, apply_carry, check_carry, controller_carry
 from impact_envs.envs.observation_space import state_space
@@ -96,10 +95,9 @@ class ImpactEnv(gym.Env):
         """The constructor's arguments (``__deepcopy__`` and pickling rebuild from them)."""
         check_args(controller, reward_type, render_mode, self.metadata["render_modes"])
         self.task = task = self.make_task() if task is None else load_task(task)
-        profile, revision = version_pins(task, env_version)  # what the env's version pins
-        preset = as_preset(controller_preset, revision)  # resolved once, name and config
-        robot, render, obs_opts = env_options(robot, render, observation)
-        robot = robot.with_default_realism(profile)
+        # resolved once, as the env's version pins them (preset name and config together)
+        preset, robot, render, obs_opts = pinned_options(task, env_version, controller_preset,
+                                                         robot, render, observation)
         self.reward_type, self.render_mode = reward_type, render_mode
         self.controller_mode = controller
         self.terminate_on_success = bool(terminate_on_success)
