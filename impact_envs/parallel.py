@@ -125,6 +125,24 @@ def ray_task_options() -> dict[str, object]:
     return {"num_cpus": 1, "max_retries": RAY_MAX_RETRIES, "runtime_env": {"env_vars": env}}
 
 
+RAY_TASKS_PER_CPU = 2
+"""Ray tasks a driver keeps in flight per cluster CPU: every CPU busy while the driver takes
+results, and few enough to leave running when a run stops early."""
+
+
+def ray_window(ray: ModuleType) -> int:
+    """How many tasks a driver keeps in flight (``RAY_TASKS_PER_CPU`` per cluster CPU, read
+    once at the start).
+
+    Tasks a run no longer needs are never ``ray.cancel``-ed: in Ray 2.x a cancellation that
+    races the reply of a task just finishing aborts the driver process (``Check failed: it !=
+    submissible_tasks_.end()`` in ``task_manager.cc``; it killed a pytest worker in our CI,
+    cf. ray-project/ray#54738). They are dropped instead: at most this window of tasks runs
+    on, until it ends or the driver's Ray session does (a session the driver started is shut
+    down when the run ends)."""
+    return RAY_TASKS_PER_CPU * max(1, int(ray.cluster_resources().get("CPU", 1)))
+
+
 @contextlib.contextmanager
 def ray_session(address: str | None) -> Iterator[ModuleType]:
     """Ray, connected: the session already open in this process (e.g. a test's

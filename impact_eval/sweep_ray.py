@@ -1,8 +1,10 @@
 """``impact-eval --executor ray``: every sweep task (a lockstep batch of one cell, or a carried
 method's whole cell, ``chain.py``) is a Ray task.
 
-The driver submits all tasks at once, each asking for one CPU, and takes their results as they
-finish (``ray.wait``); it alone writes ``episodes.csv`` (through the same sink as the local
+The driver keeps about two tasks per cluster CPU in flight (``ray_window``), each asking for one
+CPU, and takes their results as they finish (``ray.wait``), submitting the next; a run that
+stops on an error drops the tasks in flight, it does not cancel them (``ray_window`` says why).
+It alone writes ``episodes.csv`` (through the same sink as the local
 executor, and the file is sorted when the run ends, so both executors write the same bytes).
 
 Exactly once: a task returns its rows only when its whole batch has ended, so when its worker
@@ -17,8 +19,14 @@ worker process runs one task at a time.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from itertools import islice
 
-from impact_envs.parallel import ray_session, ray_task_options, single_threaded_torch
+from impact_envs.parallel import (
+    ray_session,
+    ray_task_options,
+    ray_window,
+    single_threaded_torch,
+)
 from impact_eval.sweep_config import EpisodeBatch, RowSink, SweepConfig, SweepError
 from impact_eval.sweep_worker import Worker
 
@@ -45,15 +53,13 @@ def run_on_ray(cfg: SweepConfig, tasks: Sequence[EpisodeBatch], sink: RowSink) -
     with ray_session(cfg.options.ray_address) as ray:
         remote = ray.remote(run_task).options(**ray_task_options())
         cfg_ref = ray.put(cfg)
-        pending = [remote.remote(cfg_ref, task) for task in tasks]
-        try:
-            while pending:
-                finished, pending = ray.wait(pending, num_returns=1)
-                for row in _rows(ray, finished[0]):
-                    sink(row)
-        finally:
-            for ref in pending:
-                ray.cancel(ref, force=True)
+        queue = iter(tasks)
+        pending = [remote.remote(cfg_ref, task) for task in islice(queue, ray_window(ray))]
+        while pending:
+            finished, pending = ray.wait(pending, num_returns=1)
+            pending += [remote.remote(cfg_ref, task) for task in islice(queue, 1)]
+            for row in _rows(ray, finished[0]):
+                sink(row)
 
 
 def _rows(ray: object, ref: object) -> list[dict[str, object]]:

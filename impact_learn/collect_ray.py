@@ -1,9 +1,10 @@
 """``impact-collect --executor ray``: each batch of ``n_envs`` attempts is a Ray task (a shard).
 
-The driver keeps about two batches per cluster CPU in flight and merges the shards in attempt
-order: it waits for the oldest batch, hands it to the store, submits the next. So the store
-holds exactly the episodes a local run stores (same attempts, same order, same ``n_attempts``);
-batches still running when enough demos are stored are cancelled and do not count. Shards
+The driver keeps about two batches per cluster CPU in flight (``ray_window``) and merges the
+shards in attempt order: it waits for the oldest batch, hands it to the store, submits the next.
+So the store holds exactly the episodes a local run stores (same attempts, same order, same
+``n_attempts``); batches still running when enough demos are stored do not count (they are
+dropped, not cancelled: ``ray_window`` says why). Shards
 travel through Ray's object store, so the workers need no shared filesystem. A batch whose
 worker dies is rerun by Ray (``RAY_MAX_RETRIES``); one that raises stops the run, and
 ``--resume`` continues from the episodes stored.
@@ -16,7 +17,12 @@ from collections.abc import Callable, Generator, Iterator
 
 import gymnasium as gym
 
-from impact_envs.parallel import ray_session, ray_task_options, single_threaded_torch
+from impact_envs.parallel import (
+    ray_session,
+    ray_task_options,
+    ray_window,
+    single_threaded_torch,
+)
 from impact_learn.collect_config import CollectConfig
 from impact_learn.collect_run import (  # noqa: F401 - CollectionError: its old home
     AttemptBatch,
@@ -29,9 +35,6 @@ from impact_learn.collect_run import (  # noqa: F401 - CollectionError: its old 
 
 _STATE: dict[CollectConfig, tuple[list[gym.Env], Expert]] = {}
 """This Ray worker's envs and expert (one collection at a time; a new one replaces them)."""
-
-BATCHES_PER_CPU = 2
-"""Batches in flight per cluster CPU: every CPU busy while the driver merges in order."""
 
 
 def run_batch(cfg: CollectConfig, make_env: Callable[[], gym.Env],
@@ -59,18 +62,14 @@ def ray_batch_results(
     with ray_session(cfg.ray_address) as ray:
         remote = ray.remote(run_batch).options(**ray_task_options())
         refs = [ray.put(x) for x in (cfg, make_env, make_expert)]
-        window = BATCHES_PER_CPU * max(1, int(ray.cluster_resources().get("CPU", 1)))
+        window = ray_window(ray)
         in_flight: deque = deque()
-        try:
-            for batch in batches:
-                in_flight.append((batch, remote.remote(*refs, batch.spec)))
-                if len(in_flight) >= window:
-                    yield _oldest(ray, in_flight)
-            while in_flight:
+        for batch in batches:
+            in_flight.append((batch, remote.remote(*refs, batch.spec)))
+            if len(in_flight) >= window:
                 yield _oldest(ray, in_flight)
-        finally:
-            for _, ref in in_flight:
-                ray.cancel(ref, force=True)
+        while in_flight:
+            yield _oldest(ray, in_flight)
 
 
 def _oldest(ray: object, in_flight: deque) -> tuple[AttemptBatch, list[EpisodeResult]]:
