@@ -154,7 +154,8 @@ SHIPPED = sorted((p.parent.name, p.name) for p in
 VARIANT_METHOD = {"vanilla": "vanilla_dp", "augmented": "augmented_dp", "impact": "impact",
                   "vanilla_rgb": "vanilla_dp_rgb", "lerobot_dp": "lerobot_dp",
                   "vanilla_authors": "vanilla_dp_authors",
-                  "augmented_authors": "augmented_dp_authors"}
+                  "augmented_authors": "augmented_dp_authors",
+                  "augmented_rgb": "augmented_dp_rgb"}
 """The method that loads each checkpoint variant (``lerobot_dp`` needs LeRobot: checked in its
 venv, tests/lerobot_plugin/test_plugin_policy.py without it)."""
 
