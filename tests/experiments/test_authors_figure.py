@@ -74,6 +74,25 @@ def test_issue_55_checks_on_their_demonstrator() -> None:
                       "below 0.72"]
 
 
+PIXELS = {"vanilla": "dp.vanilla_rgb+impedance@authors_sim",
+          "augmented": "dp.augmented_rgb+impedance@authors_sim", "theirs": "impact_authors_rgb"}
+
+
+def test_issue_56_checks_on_their_camera_rows() -> None:
+    """The camera rows have their own set and floor: ours at 36/50 passes (>= 0.70 pooled up to
+    8 kg, no bin below 28/50), one bin at 27/50 fails; the state rows' checks are not asked."""
+    good = {**_published(PIXELS), "impact_rgb": [36] * 8}
+    rates = bin_rates(_episodes(good))
+    assert set(rates["demo"]) == {"pixels"}
+    checks = {what: ok for what, ok, _ in acceptance(rates)}
+    assert len(checks) == 6 and all(checks.values()), checks
+    assert all(what.startswith("their demonstrator, cameras, ") for what in checks)
+    low_bin = {**good, "impact_rgb": [36, 36, 36, 36, 27, 40, 40, 36]}
+    checks = {what: ok for what, ok, _ in acceptance(bin_rates(_episodes(low_bin)))}
+    assert not checks["their demonstrator, cameras, IMPACT ours >= 0.70 pooled up to 8 kg, "
+                      "no bin below 0.56"]
+
+
 def test_the_command_writes_the_table_and_the_plot_from_two_tables(tmp_path: Path,
                                                                     capsys) -> None:
     first, second = tmp_path / "theirs", tmp_path / "ours"
