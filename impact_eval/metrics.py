@@ -97,6 +97,20 @@ def wilson_interval(successes: int, n: int, z: float = Z_95) -> tuple[float, flo
     return max(0.0, center - half), min(1.0, center + half)
 
 
+def fisher_two_sided(k1: int, n1: int, k2: int, n2: int) -> float:
+    """Two-sided Fisher exact test p of a 2 x 2 table (successes k of n, two groups): the
+    summed probability of every table with the same margins no likelier than this one."""
+    total, ones = n1 + n2, k1 + k2
+    denom = math.comb(total, n1)
+
+    def prob(a: int) -> float:
+        return math.comb(ones, a) * math.comb(total - ones, n1 - a) / denom
+
+    observed = prob(k1)
+    support = range(max(0, ones - n2), min(ones, n1) + 1)
+    return min(1.0, sum(p for p in map(prob, support) if p <= observed * (1 + 1e-9)))
+
+
 def one_line(text: str) -> str:
     """Collapse whitespace to single spaces and cut to ``MAX_REASON_CHARS``."""
     return " ".join(str(text).split())[:MAX_REASON_CHARS]

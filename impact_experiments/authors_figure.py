@@ -23,13 +23,12 @@ Their values: ``resources/SR_3d.svg`` of ``Winston-Gu/IMPACT`` (gh-pages), read 
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from impact_eval.metrics import wilson_interval
+from impact_eval.metrics import fisher_two_sided, wilson_interval
 
 BINS = ((0.1, 0.3), (0.3, 0.5), (0.5, 1.0), (1.0, 2.0), (2.0, 4.0), (4.0, 6.0), (6.0, 8.0),
         (8.0, 10.0))
@@ -79,20 +78,6 @@ def bin_rates(episodes: pd.DataFrame) -> pd.DataFrame:
         rows.append({"method": method, "demo": demo, "role": role, "bin_lo": float(lo), "n": n,
                      "k": k, "rate": k / n, "ci_low": low, "ci_high": high})
     return pd.DataFrame(rows)
-
-
-def fisher_two_sided(k1: int, n1: int, k2: int, n2: int) -> float:
-    """Two-sided Fisher exact test p of a 2 x 2 table (successes k of n, two groups): the
-    summed probability of every table with the same margins no likelier than this one."""
-    total, ones = n1 + n2, k1 + k2
-    denom = math.comb(total, n1)
-
-    def prob(a: int) -> float:
-        return math.comb(ones, a) * math.comb(total - ones, n1 - a) / denom
-
-    observed = prob(k1)
-    support = range(max(0, ones - n2), min(ones, n1) + 1)
-    return min(1.0, sum(p for p in map(prob, support) if p <= observed * (1 + 1e-9)))
 
 
 def _cells(rates: pd.DataFrame, demo: str) -> dict[tuple[str, float], object]:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fixtures.eval_fake import BARE_ID, FakePolicy
 
-from impact_eval.metrics import EpisodeTracker, wilson_interval
+from impact_eval.metrics import EpisodeTracker, fisher_two_sided, wilson_interval
 from impact_eval.rollout import EpisodeJob, LockstepBatch
 from impact_eval.safety import scene_contact
 
@@ -150,3 +150,9 @@ def test_lockstep_batch_is_reproducible() -> None:
     first, second = _run_batch([0.5, 2.0, 4.0]), _run_batch([0.5, 2.0, 4.0])
     assert first == second
     assert np.isfinite([r["energy_j"] for r in first.values()]).all()
+
+
+def test_fisher_matches_textbook_values() -> None:
+    assert fisher_two_sided(3, 4, 1, 4) == pytest.approx(0.4857, abs=1e-4)  # the lady tasting tea
+    assert fisher_two_sided(10, 10, 0, 10) == pytest.approx(2 / 184756, rel=1e-9)
+    assert fisher_two_sided(5, 10, 5, 10) == pytest.approx(1.0)

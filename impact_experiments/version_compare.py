@@ -1,0 +1,112 @@
+"""A table on the new env version against its twin on the old one, method by method (issue 59).
+
+    python -m impact_experiments.version_compare [TABLE ...] [--version 2] [--out FILE]
+
+For each named table (default: every table of ``results/manifest.json`` whose twin
+``TABLE_vN`` is recorded there, ``rerun_tables --to-version N``), the rows of ``TABLE`` (the
+old version) and ``TABLE_vN`` are compared per method, pooled over the table's cells:
+successes k/n on each side, the two-sided Fisher p, and whether the new version is
+**significantly lower** (its rate below and p < 5 %: issue 59 asks that no headline claim of
+``default`` is); the cells whose successes moved; and the safety columns, as means over the
+episodes: time above 20 N (``contact_over_20n_s``) and the sustained contact peak
+(``peak_contact_sustained_n``, where both sides have it). Bad input (a table or twin not in
+the manifest, a missing ``episodes.csv``) is one line, exit 2, before anything is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import pandas as pd
+
+from impact_control.errors import InvalidArgumentError
+from impact_eval.metrics import fisher_two_sided
+from impact_eval.reproduce_manifest import load_manifest
+from impact_experiments.rerun_tables import RESULTS
+
+SAFETY = ("contact_over_20n_s", "peak_contact_sustained_n")
+"""Safety columns compared (means over a method's episodes), where both sides have them."""
+
+
+def twins(tables: dict, version: int) -> list[str]:
+    """The tables of the manifest with a twin on ``version``, in the manifest's order."""
+    return [t for t in tables if f"{t}_v{version}" in tables]
+
+
+def compare_method(old: pd.DataFrame, new: pd.DataFrame) -> dict[str, object]:
+    """One method's rows on each side: pooled successes, Fisher p, moved cells, safety means."""
+    k1, n1, k2, n2 = int(old["success"].sum()), len(old), int(new["success"].sum()), len(new)
+    p = fisher_two_sided(k1, n1, k2, n2)
+    per_cell = pd.concat([old.groupby("param_value")["success"].sum().rename("old"),
+                          new.groupby("param_value")["success"].sum().rename("new")], axis=1)
+    moved = per_cell[per_cell["old"] != per_cell["new"]].fillna(0)
+    row: dict[str, object] = {
+        "old": f"{k1}/{n1}", "new": f"{k2}/{n2}", "fisher_p": p,
+        "significantly_lower": n1 > 0 and n2 > 0 and k2 / n2 < k1 / n1 and p < 0.05,
+        "cells_moved": "; ".join(f"{v:g}: {int(r.old)}→{int(r.new)}"
+                                 for v, r in moved.iterrows()) or "none"}
+    for col in SAFETY:
+        if col in old and col in new:
+            row[col] = f"{old[col].mean():.2f} → {new[col].mean():.2f}"
+    return row
+
+
+def compare_table(old: pd.DataFrame, new: pd.DataFrame) -> pd.DataFrame:
+    """:func:`compare_method` for every method on both sides, in the old table's order."""
+    methods = [m for m in dict.fromkeys(old["method"]) if m in set(new["method"])]
+    return pd.DataFrame([{"method": m, **compare_method(old[old["method"] == m],
+                                                      new[new["method"] == m])}
+                         for m in methods])
+
+
+def markdown(name: str, version: int, rows: pd.DataFrame) -> str:
+    """One table's comparison as a markdown section."""
+    cols = ["method", "old", "new", "fisher_p", "significantly_lower", "cells_moved",
+            *[c for c in SAFETY if c in rows]]
+    head = (f"### `{name}` → `{name}_v{version}`\n\n| " + " | ".join(cols) + " |\n|"
+            + "---|" * len(cols) + "\n")
+    body = "".join("| " + " | ".join(
+        f"{r[c]:.3g}" if c == "fisher_p" else ("**yes**" if r[c] is True else "no")
+        if c == "significantly_lower" else str(r[c]) for c in cols) + " |\n"
+        for _, r in rows.iterrows())
+    return head + body
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("tables", nargs="*", metavar="TABLE", help="a table with a twin")
+    parser.add_argument("--version", type=int, default=2, help="the twins' env version")
+    parser.add_argument("--out", type=Path, help="also write the report here (markdown)")
+    parser.add_argument("--results", type=Path, default=RESULTS, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    try:
+        manifest = load_manifest(args.results)["tables"]
+    except InvalidArgumentError as exc:
+        parser.error(str(exc))
+    valid = twins(manifest, args.version)
+    for table in args.tables:
+        if table not in valid:
+            parser.error(f"{table}: no twin {table}_v{args.version} in the manifest; valid: "
+                         f"{', '.join(valid) or 'none yet (rerun_tables --to-version)'}")
+    if not valid:
+        parser.error(f"no table of the manifest has a twin on -v{args.version}; valid: run "
+                     f"rerun_tables --to-version {args.version} first")
+    frames = {}
+    for table in args.tables or valid:
+        for name in (table, f"{table}_v{args.version}"):
+            csv = args.results / manifest[name]["dir"] / "episodes.csv"
+            if not csv.is_file():
+                parser.error(f"{name}: no {csv}; valid: a recorded table's folder")
+            frames[name] = pd.read_csv(csv, keep_default_na=False)
+    text = "".join(markdown(t, args.version, compare_table(frames[t],
+                                                            frames[f"{t}_v{args.version}"]))
+                   + "\n" for t in args.tables or valid)
+    print(text, end="")
+    if args.out:
+        args.out.write_text(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,63 @@
+"""``impact_experiments.version_compare``: a table against its ``-v2`` twin, per method."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from impact_experiments.version_compare import compare_table, main
+
+
+def _rows(method: str, successes: dict[float, int], n: int = 20,
+          over_20n_s: float = 0.0) -> list[dict]:
+    return [{"method": method, "param_value": v, "episode": e, "success": int(e < k),
+             "contact_over_20n_s": over_20n_s}
+            for v, k in successes.items() for e in range(n)]
+
+
+def test_a_drop_of_half_is_significant_and_one_episode_is_not() -> None:
+    old = pd.DataFrame(_rows("impact", {1.0: 20, 5.0: 18}) + _rows("vanilla_dp", {1.0: 10, 5.0: 0}))
+    new = pd.DataFrame(_rows("impact", {1.0: 10, 5.0: 8}, over_20n_s=1.5)
+                       + _rows("vanilla_dp", {1.0: 9, 5.0: 0}))
+    rows = compare_table(old, new).set_index("method")
+    assert rows.loc["impact", "old"] == "38/40" and rows.loc["impact", "new"] == "18/40"
+    assert rows.loc["impact", "significantly_lower"]
+    assert rows.loc["impact", "cells_moved"] == "1: 20→10; 5: 18→8"
+    assert rows.loc["impact", "contact_over_20n_s"] == "0.00 → 1.50"
+    assert not rows.loc["vanilla_dp", "significantly_lower"]
+    assert rows.loc["vanilla_dp", "fisher_p"] == pytest.approx(1.0)
+    assert "peak_contact_sustained_n" not in rows  # neither side has it
+
+
+def _results(tmp_path: Path) -> Path:
+    for name, k in (("t", 18), ("t_v2", 17)):
+        (tmp_path / name).mkdir()
+        pd.DataFrame(_rows("impact", {1.0: k})).to_csv(tmp_path / name / "episodes.csv",
+                                                       index=False)
+    (tmp_path / "manifest.json").write_text(json.dumps(
+        {"format": 1, "tables": {"t": {"dir": "t"}, "t_v2": {"dir": "t_v2"},
+                                 "other": {"dir": "other"}}}))
+    return tmp_path
+
+
+def test_the_command_finds_the_twins_and_writes_the_report(tmp_path: Path, capsys) -> None:
+    results = _results(tmp_path)
+    out = tmp_path / "report.md"
+    assert main(["--results", str(results), "--out", str(out)]) == 0
+    text = out.read_text()
+    assert "### `t` → `t_v2`" in text and "| impact | 18/20 | 17/20 | 1 | no | 1: 18→17 |" in text
+    assert text == capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["other"], "no twin other_v2 in the manifest; valid: t"),
+    (["--version", "3"], "no table of the manifest has a twin on -v3"),
+    (["--results", "/nonexistent"], "no manifest.json in /nonexistent")])
+def test_bad_input_is_one_line(tmp_path: Path, capsys, argv, needle) -> None:
+    results = _results(tmp_path)
+    with pytest.raises(SystemExit) as exc:
+        main(["--results", str(results), *argv])
+    assert exc.value.code == 2 and needle in capsys.readouterr().err.strip().splitlines()[-1]
