@@ -103,3 +103,24 @@ def checkpoint_observation(path: Path) -> ObservationOptions | None:
             f"cannot read the observation of checkpoint {path}: {type(exc).__name__}: {msg}"
         ) from None
     return options if options.uses_images else None
+
+
+def checkpoint_demo_preset(path: Path) -> str | None:
+    """The controller preset the demonstrations of the checkpoint at ``path`` were recorded
+    under (``meta.json``, ``dataset.attrs.controller_preset``, written by ``impact-collect``),
+    None where it records none.
+
+    Raises:
+        CheckpointError: ``meta.json`` is unreadable.
+    """
+    if not (path / "meta.json").is_file():
+        return None
+    try:
+        meta = json.loads((path / "meta.json").read_text())
+        preset = meta.get("dataset", {}).get("attrs", {}).get("controller_preset")
+    except (OSError, ValueError, AttributeError) as exc:
+        msg = " ".join(str(exc).split())[:160]
+        raise CheckpointError(
+            f"cannot read the demos' preset of checkpoint {path}: {type(exc).__name__}: {msg}"
+        ) from None
+    return preset if isinstance(preset, str) else None

@@ -6,13 +6,14 @@ import importlib
 import json
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import gymnasium as gym
 import numpy as np
 
 from impact_control.errors import ImpactError, InvalidArgumentError
-from impact_control.presets import resolve_preset
+from impact_control.overrides import apply_overrides
+from impact_control.presets import CUSTOM, Preset, resolve_preset
 from impact_envs.versions import check_not_retired, preset_revision
 from impact_eval.grid import plain_number
 
@@ -71,10 +72,22 @@ def check_masses(env_id: str, masses: Sequence[float]) -> None:
         env.close()
 
 
+def with_impedance_of(preset: str, impedance_from: str | None, overrides: Sequence[str],
+                      revision: int) -> Preset:
+    """Preset ``preset`` of ``revision`` with the impedance section of ``impedance_from``
+    (None: its own), then ``overrides``; ``"custom"`` where that changed its config."""
+    if impedance_from is None:
+        return resolve_preset(preset, overrides, revision=revision)
+    base = resolve_preset(preset, revision=revision).config
+    impedance = resolve_preset(impedance_from, revision=revision).config.impedance
+    config = apply_overrides(replace(base, impedance=impedance), list(overrides))
+    return Preset(CUSTOM if overrides or config != base else preset, config)
+
+
 def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
              preset: str = "default", render: bool = False,
              observation: object | None = None, robot: object | None = None,
-             robot_overrides: Sequence[str] = ()) -> gym.Env:
+             robot_overrides: Sequence[str] = (), impedance_from: str | None = None) -> gym.Env:
     """``gym.make(env_id, controller=controller, controller_preset=preset)``, errors turned
     into ``ImpactError``; ``observation`` and ``robot`` (an ``ObservationOptions``, a
     ``RobotOptions``) are passed when given.
@@ -84,6 +97,9 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
     (``SECTION.FIELD=VALUE``, ``control.overrides``) change the controller's config from the
     preset's values, for ablations; ``robot_overrides`` (``FIELD=VALUE``,
     ``RobotOptions`` fields, e.g. ``realism=fr3``) change the robot on top of ``robot``.
+    ``impedance_from`` (a preset name) replaces the impedance section of the preset with that
+    preset's (``MethodSpec.demo_impedance``), before the overrides; a changed config is
+    passed as a ``"custom"`` preset, as with overrides.
     Envs outside the IMPACT namespace (plugins) get the preset
     argument only when it is not ``"default"``, so a plugin env that cannot take it fails in one
     line instead of silently running another configuration.
@@ -91,11 +107,11 @@ def make_env(env_id: str, controller: str, overrides: Sequence[str] = (),
     extra: dict[str, object] = {}
     # A preset by its name (the env resolves it once, and run.json's env spec records the
     # name); with overrides, the resolved Preset, its name "custom" travelling with it.
-    resolved = resolve_preset(preset, overrides, revision=preset_revision(env_id))
+    resolved = with_impedance_of(preset, impedance_from, overrides, preset_revision(env_id))
     if env_id.split(":")[-1].startswith("IMPACT/"):
         extra["terminate_on_success"] = True
-        extra["controller_preset"] = resolved if overrides else resolved.name
-    elif overrides:  # an env of another namespace takes a name or a ControllerConfig
+        extra["controller_preset"] = resolved if resolved.name == CUSTOM else resolved.name
+    elif resolved.name == CUSTOM:  # an env of another namespace takes a name or a config
         extra["controller_preset"] = resolved.config
     elif preset != "default":
         extra["controller_preset"] = preset
@@ -227,7 +243,8 @@ def method_env(env_id: str, spec: object, overrides: Sequence[str] = (),
     ``impact_envs.wrappers.RLActions`` when the method acts in one of its modes (an SB3 model
     trained on the wrapper)."""
     env = make_env(env_id, spec.controller, overrides, spec.preset, render,
-                   spec.observation_for(env_id), getattr(spec, "robot", None), robot_overrides)
+                   spec.observation_for(env_id), getattr(spec, "robot", None), robot_overrides,
+                   spec.impedance_preset(env_id))
     if spec.action_mode is None:
         return env
     from impact_envs.wrappers import RLActions

@@ -37,9 +37,10 @@ AUTHORS_ROBOT = RobotOptions(torque_reading="commanded")
 applied command as the joint torque, as the authors' simulation does (``qfrc_actuator``,
 noise-free)."""
 
-FLAGS = ("warm", "carry", "commanded")
+FLAGS = ("warm", "carry", "commanded", "demo_impedance")
 """Flags of a composed method: ``warm`` (``MethodSpec.warm``), ``carry`` (``MethodSpec.carry``),
-``commanded`` (the robot ``AUTHORS_ROBOT``)."""
+``commanded`` (the robot ``AUTHORS_ROBOT``), ``demo_impedance``
+(``MethodSpec.demo_impedance``)."""
 
 POLICY_FORMS = ("scripted", "scripted.closed_loop", "dp.<variant>", "dp.nominal",
                 "lerobot.<variant>")

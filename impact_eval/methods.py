@@ -59,12 +59,13 @@ from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 
 from impact_control.controller import CONTROLLERS
-from impact_control.errors import InvalidArgumentError, check_choice
+from impact_control.errors import CheckpointError, InvalidArgumentError, check_choice
 from impact_control.presets import PRESETS
 from impact_envs.envs.options import ObservationOptions, RobotOptions, apply_robot_overrides
 from impact_envs.versions import robot_realism
 from impact_eval.checkpoints import (
     CHECKPOINTS_ENV_VAR,
+    checkpoint_demo_preset,
     checkpoint_dir,
     checkpoint_observation,
     env_short_name,
@@ -114,6 +115,11 @@ class MethodSpec:
     policy: str | None = None
     """The canonical policy component (``method_parts.POLICY_FORMS``, e.g. ``dp.vanilla``) of a
     composed or shortcut method; None for an SB3 zip or a plugin's own factory."""
+    demo_impedance: bool = False
+    """Run the impedance section of the preset the checkpoint's demos were recorded under
+    (``impedance_preset``), the rest of the controller from ``preset``: the arm tracks the
+    policy's targets as it did in its demos, and IMPACT only adds its stages (docs/eval.md,
+    "The demos' impedance")."""
 
     def __post_init__(self) -> None:
         if self.carry and self.warm:
@@ -121,6 +127,10 @@ class MethodSpec:
                 f"method {self.name!r}: carry and warm exclude each other (a carried chain "
                 "already starts each episode from the internal model the previous one left); "
                 "choose one")
+        if self.demo_impedance and not (self.policy or "").startswith("dp."):
+            raise InvalidArgumentError(
+                f"method {self.name!r}: demo_impedance reads the preset a diffusion-policy "
+                "checkpoint's demos were recorded under; valid: a dp.<variant> policy")
         if self.warm and self.controller != WARM_CONTROLLER:
             raise InvalidArgumentError(
                 f"method {self.name!r}: warm warms IMPACT's internal model, which the "
@@ -140,23 +150,43 @@ class MethodSpec:
             return self.observation
         return checkpoint_observation(policy_checkpoint(env_id, self.policy))
 
+    def impedance_preset(self, env_id: str) -> str | None:
+        """With ``demo_impedance``, the preset whose impedance section runs on ``env_id``: the
+        one the checkpoint's demos were recorded under; else None (``preset``'s own).
+
+        Raises:
+            CheckpointError: the checkpoint is missing, or its ``meta.json`` names no preset.
+        """
+        if not self.demo_impedance:
+            return None
+        path = policy_checkpoint(env_id, self.policy)
+        preset = None if path is None else checkpoint_demo_preset(path)
+        if preset not in PRESETS:
+            raise CheckpointError(
+                f"method {self.name!r}: checkpoint {path} records no demo controller preset "
+                f"(meta.json dataset.attrs.controller_preset: {preset!r}); valid: one of "
+                f"{', '.join(PRESETS)}, or the method without +demo_impedance")
+        return preset
+
     def env_key(self, env_id: str) -> tuple[str, str, str | None, ObservationOptions | None,
-                                            RobotOptions | None]:
-        """(controller, preset, action mode, observation, robot) on ``env_id``: methods with
-        equal keys can share envs."""
+                                            RobotOptions | None, str | None]:
+        """(controller, preset, action mode, observation, robot, impedance preset) on
+        ``env_id``: methods with equal keys can share envs."""
         return (self.controller, self.preset, self.action_mode, self.observation_for(env_id),
-                self.robot)
+                self.robot, self.impedance_preset(env_id))
 
     def settings_for(self, env_id: str) -> dict[str, object]:
         """What ``run.json`` and ``identity.json`` record per method (``args.method_controllers``)
-        and ``--resume`` compares on ``env_id``: controller, preset, warm; ``carry`` and
-        ``robot`` only where set, so that the records of runs made before they existed still
-        match. The robot is recorded as it runs there: an unset ``realism`` as the env
-        version's profile (``impact_envs/versions.py``)."""
+        and ``--resume`` compares on ``env_id``: controller, preset, warm; ``carry``, ``robot``
+        and ``impedance_preset`` (``demo_impedance``) only where set, so that the records of
+        runs made before they existed still match. The robot is recorded as it runs there: an
+        unset ``realism`` as the env version's profile (``impact_envs/versions.py``)."""
         out: dict[str, object] = {"controller": self.controller, "preset": self.preset,
                                   "warm": self.warm}
         if self.carry:
             out["carry"] = True
+        if self.demo_impedance:
+            out["impedance_preset"] = self.impedance_preset(env_id)
         if self.robot is not None:
             out["robot"] = asdict(self.robot.with_default_realism(robot_realism(env_id)))
         return out
@@ -225,7 +255,7 @@ def compose(composition: str, name: str | None = None,
         description or f"{part.name} + {controller} controller, preset {preset}",
         preset=preset, warm="warm" in flags, observation=part.observation,
         robot=AUTHORS_ROBOT if "commanded" in flags else None, carry="carry" in flags,
-        policy=part.name)
+        policy=part.name, demo_impedance="demo_impedance" in flags)
 
 
 def resolve_method(name: str) -> MethodSpec:

@@ -151,7 +151,8 @@ def _inspect_env(sweep: SweepSpec, methods: list[MethodSpec], values: list[float
                 envs[key] = make_env(
                     sweep.env_id, spec.controller, sweep.controller_overrides, spec.preset,
                     observation=spec.observation_for(sweep.env_id), robot=spec.robot,
-                    robot_overrides=sweep.robot_overrides)
+                    robot_overrides=sweep.robot_overrides,
+                    impedance_from=spec.impedance_preset(sweep.env_id))
             if spec.carry:
                 check_carries(spec, envs[key], sweep.env_id)
         first = next(iter(envs.values()))

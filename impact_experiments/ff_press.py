@@ -69,7 +69,8 @@ def run_cell(cell: Cell) -> list[dict[str, object]]:
 
     spec = resolve_method(cell.method)
     envs = [make_env(cell.env_id, spec.controller, cell.overrides, spec.preset,
-                     robot=spec.robot) for _ in cell.episodes]
+                     robot=spec.robot, impedance_from=spec.impedance_preset(cell.env_id))
+            for _ in cell.episodes]
     for env in envs:  # the loop records the feedforward's push only when asked
         env.unwrapped.loop.record_press_diagnostics = True
     described = describe_env(envs[0])

@@ -30,7 +30,7 @@ import numpy as np
 from impact_control.errors import ImpactError
 from impact_control.policy import stack_obs
 from impact_envs.cli import add_robot_set
-from impact_eval.envs import check_env_id, describe_env, make_env
+from impact_eval.envs import check_env_id, describe_env, method_env
 from impact_eval.methods import resolve_method
 from impact_eval.rollout import seed_global_rngs
 
@@ -40,10 +40,10 @@ HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate  rel_s 
 def open_method(env_id: str, method: str, overrides: Sequence[str] = (),
                 robot_overrides: Sequence[str] = ()) -> tuple[object, object]:
     """(env, policy) of ``method`` on ``env_id``, as impact-eval builds them (the method's
-    controller, preset and robot, e.g. ``impact_authors``' commanded torque reading)."""
+    controller, preset, robot and observation, e.g. ``impact_authors``' commanded torque
+    reading, a camera policy's images)."""
     spec = resolve_method(method)
-    env = make_env(check_env_id(env_id), spec.controller, overrides, spec.preset,
-                   robot=spec.robot, robot_overrides=robot_overrides)
+    env = method_env(check_env_id(env_id), spec, overrides, robot_overrides=robot_overrides)
     return env, spec.build(env_id, env)
 
 
@@ -71,6 +71,7 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
         sim = env.unwrapped.sim
         sim.model.dof_frictionloss[sim.arm_dof] = 0.0
     obs = start_episode(env, policy, value, seed)
+    task, sim = env.unwrapped.task, env.unwrapped.sim  # the object, also for camera policies
     lines, step, done = [HEADER + ("  succ" if full else "")], 0, False
     while not done:
         action = np.asarray(policy.act(stack_obs([obs]))[0])
@@ -80,7 +81,8 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
         if step % every == 0 or done:
             lines.append(
                 f"{step:4d} {obs['ee_pos'][2]:6.3f} {action[2]:6.3f} {action[9]:5.2f} "
-                f"{obs['object_pos'][2]:6.3f} {info['wrench_pred_world'][2]:7.1f} "
+                f"{task.observation(sim)['object_pos'][2]:6.3f} "
+                f"{info['wrench_pred_world'][2]:7.1f} "
                 f"{info['wrench_slow_world'][2]:7.1f} {info['wrench_ext_world'][2]:7.1f} "
                 f"{int(info['gate_open']):5d} {release.scale:6.2f} "
                 f"{info['peak_robot_contact_force_n']:7.1f}"

@@ -120,11 +120,11 @@ def test_trace_without_joint_friction_zeroes_the_plants_friction(monkeypatch):
 
     made = []
 
-    def recording_make_env(*args, **kwargs):
-        made.append(envs_mod.make_env(*args, **kwargs))
+    def recording_method_env(*args, **kwargs):
+        made.append(envs_mod.method_env(*args, **kwargs))
         return made[-1]
 
-    monkeypatch.setattr(trace_mod, "make_env", recording_make_env)
+    monkeypatch.setattr(trace_mod, "method_env", recording_method_env)
     lines = trace_mod.trace("IMPACT/Calligraphy-v1", "scripted", 0.1, seed=0, every=1000,
                             joint_friction=False)
     sim = made[0].unwrapped.sim
