@@ -41,6 +41,7 @@ PUBLISHED = {
 """Their published success per bin, by role."""
 ROLE_LABELS = {"vanilla": "Vanilla DP", "augmented": "Augmented DP",
                "theirs": "IMPACT, their controller", "ours": "IMPACT, ours",
+               "own_impedance": "IMPACT, ours on its own impedance",
                "paper": "IMPACT, ours (paper)"}
 DEMONSTRATORS = {"theirs": "their demonstrator", "pixels": "their demonstrator, cameras",
                  "ours": "our demonstrator"}
@@ -56,14 +57,17 @@ METHODS = {
     "dp.vanilla_rgb+impedance@authors_sim": ("pixels", "vanilla"),
     "dp.augmented_rgb+impedance@authors_sim": ("pixels", "augmented"),
     "impact_authors_rgb": ("pixels", "theirs"),
-    "impact_rgb": ("pixels", "ours"),
+    "dp.vanilla_rgb+impact@keep_carried+demo_impedance": ("pixels", "ours"),
+    "impact_rgb": ("pixels", "own_impedance"),
     "vanilla_dp": ("ours", "vanilla"),
     "augmented_dp": ("ours", "augmented"),
     "impact_authors": ("ours", "theirs"),
     "impact": ("ours", "ours"),
     "impact_paper": ("ours", "paper"),
 }
-"""Method name -> (demonstrator, role), in the table's order."""
+"""Method name -> (demonstrator, role), in the table's order. With cameras, ours runs on the
+impedance of the policy's demos (``+demo_impedance``, docs/eval.md: chosen on tuning seeds);
+``impact_rgb``, on ``keep_carried``'s own impedance, is drawn beside it."""
 
 
 def bin_rates(episodes: pd.DataFrame) -> pd.DataFrame:
