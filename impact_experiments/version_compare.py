@@ -66,11 +66,18 @@ def markdown(name: str, version: int, rows: pd.DataFrame) -> str:
             *[c for c in SAFETY if c in rows]]
     head = (f"### `{name}` → `{name}_v{version}`\n\n| " + " | ".join(cols) + " |\n|"
             + "---|" * len(cols) + "\n")
-    body = "".join("| " + " | ".join(
-        f"{r[c]:.3g}" if c == "fisher_p" else ("**yes**" if r[c] is True else "no")
-        if c == "significantly_lower" else str(r[c]) for c in cols) + " |\n"
-        for _, r in rows.iterrows())
+    body = "".join("| " + " | ".join(_cell(c, r[c]) for c in cols) + " |\n"
+                   for _, r in rows.iterrows())
     return head + body
+
+
+def _cell(column: str, value: object) -> str:
+    """One table cell: p to 3 significant digits, the verdict as yes (bold) / no."""
+    if column == "fisher_p":
+        return f"{value:.3g}"
+    if column == "significantly_lower":
+        return "**yes**" if value else "no"
+    return str(value)
 
 
 def main(argv: list[str] | None = None) -> int:
