@@ -239,7 +239,8 @@ def precompile_kernels(env: gym.Env) -> None:
 
 def method_env(env_id: str, spec: object, overrides: Sequence[str] = (),
                render: bool = False, robot_overrides: Sequence[str] = ()) -> gym.Env:
-    """``make_env`` for a method: its controller, preset, observation and robot, wrapped in
+    """``make_env`` for a method: its controller, preset (with its demos' impedance where it
+    has ``demo_impedance``), observation and robot, wrapped in
     ``impact_envs.wrappers.RLActions`` when the method acts in one of its modes (an SB3 model
     trained on the wrapper)."""
     env = make_env(env_id, spec.controller, overrides, spec.preset, render,

@@ -117,9 +117,9 @@ class MethodSpec:
     composed or shortcut method; None for an SB3 zip or a plugin's own factory."""
     demo_impedance: bool = False
     """Run the impedance section of the preset the checkpoint's demos were recorded under
-    (``impedance_preset``), the rest of the controller from ``preset``: the arm tracks the
-    policy's targets as it did in its demos, and IMPACT only adds its stages (docs/eval.md,
-    "The demos' impedance")."""
+    (``impedance_preset``: gains, null space, frame), every other section from ``preset``
+    (IMPACT's stages, and also its target filter and torque-rate limiter, which are not the
+    impedance; docs/eval.md, "The demos' impedance")."""
 
     def __post_init__(self) -> None:
         if self.carry and self.warm:
@@ -162,10 +162,12 @@ class MethodSpec:
         path = policy_checkpoint(env_id, self.policy)
         preset = None if path is None else checkpoint_demo_preset(path)
         if preset not in PRESETS:
+            what = ("records no demo controller preset" if preset is None
+                    else f"records demo controller preset {preset!r}, not a preset here")
             raise CheckpointError(
-                f"method {self.name!r}: checkpoint {path} records no demo controller preset "
-                f"(meta.json dataset.attrs.controller_preset: {preset!r}); valid: one of "
-                f"{', '.join(PRESETS)}, or the method without +demo_impedance")
+                f"method {self.name!r}: checkpoint {path} {what} (meta.json "
+                f"dataset.attrs.controller_preset); valid: one of {', '.join(PRESETS)}, or the "
+                "method without +demo_impedance")
         return preset
 
     def env_key(self, env_id: str) -> tuple[str, str, str | None, ObservationOptions | None,

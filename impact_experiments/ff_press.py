@@ -63,14 +63,12 @@ class Cell:
 
 def run_cell(cell: Cell) -> list[dict[str, object]]:
     """The rows (``COLUMNS``) of ``cell``'s episodes."""
-    from impact_eval.envs import describe_env, make_env
+    from impact_eval.envs import describe_env, method_env
     from impact_eval.methods import resolve_method
     from impact_eval.rollout import EpisodeJob, LockstepBatch
 
     spec = resolve_method(cell.method)
-    envs = [make_env(cell.env_id, spec.controller, cell.overrides, spec.preset,
-                     robot=spec.robot, impedance_from=spec.impedance_preset(cell.env_id))
-            for _ in cell.episodes]
+    envs = [method_env(cell.env_id, spec, cell.overrides) for _ in cell.episodes]
     for env in envs:  # the loop records the feedforward's push only when asked
         env.unwrapped.loop.record_press_diagnostics = True
     described = describe_env(envs[0])

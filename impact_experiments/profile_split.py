@@ -7,11 +7,15 @@ table instead. Record the running sweep out of process, in files of a fixed leng
 
 then ``python -m impact_experiments.profile_split spy/*.txt --episodes N --wall-s W``. Each
 sample of a worker's main thread (a stack through ``_worker_main``) counts for one part, the
-first of ``PARTS`` whose frame is on its stack: rendering the cameras, the policy's ``act``,
-physics (``FrankaSim.step``: raw ``mj_step``) and the rest (the 1 kHz controller, the env's
-own work, resets and loading). Idle samples are not recorded by py-spy, and the driver
-process and the workers' queue threads are left out. With the table's episodes and wall
-time, the shares become seconds of one worker per episode.
+first of ``PARTS`` whose frame is on its stack: rendering the cameras (``render`` in
+``impact_envs/envs/pixels.py``), the policy (the ``act`` the rollout calls, any policy),
+physics (``step`` in ``impact_envs/robot/sim.py``: raw ``mj_step``) and the rest (the 1 kHz
+controller, the env's own work, resets and loading). Frames are matched by function name and
+file, so py-spy's class-qualified names (``DiffusionPolicy.act``) and its older bare ones both
+count. Idle samples are not recorded by py-spy, and the driver process and the workers' queue
+threads are left out. With the table's episodes and wall time, the shares become seconds of
+one worker per episode. Samples of which no named part matched are refused in one line: the
+markers no longer name this code.
 """
 
 from __future__ import annotations
@@ -20,16 +24,32 @@ import argparse
 from collections import Counter
 from pathlib import Path
 
-PARTS = (("rendering", "PixelObservations.render ("), ("policy", "Policy.act ("),
-         ("physics (mj_step)", "FrankaSim.step ("), ("controller, env and the rest", ""))
-"""(part, a frame that marks it), in the order a stack is matched; "" matches every stack."""
+PARTS = (("rendering", "render", "impact_envs/envs/pixels.py:"),
+         ("policy", "act", "impact_eval/rollout.py:"),
+         ("physics (mj_step)", "step", "impact_envs/robot/sim.py:"))
+"""(part, function, file): a frame of that function in that file marks the part; for the
+policy, a frame of that function called from that file (the rollout asking its policy)."""
+REST = "controller, env and the rest"
 WORKER_FRAME = "_worker_main ("
 """The frame of a sweep worker's main loop (``impact_eval/sweep.py``)."""
 
 
+def _function(frame: str) -> str:
+    """``DiffusionPolicy.act (path.py:12)`` -> ``act``."""
+    return frame.partition(" (")[0].rpartition(".")[2]
+
+
 def part_of(stack: str) -> str:
-    """The part one sampled stack (py-spy raw, frames joined by ';') counts for."""
-    return next(name for name, frame in PARTS if frame in stack)
+    """The part one sampled stack (py-spy raw, frames joined by ';', root first) counts for."""
+    frames = stack.split(";")
+    for name, function, where in PARTS:
+        if name == "policy":
+            if any(where in caller and _function(frame) == function
+                   for caller, frame in zip(frames, frames[1:], strict=False)):
+                return name
+        elif any(where in frame and _function(frame) == function for frame in frames):
+            return name
+    return REST
 
 
 def count_samples(paths: list[Path]) -> Counter[str]:
@@ -51,7 +71,7 @@ def split_table(counts: Counter[str], episodes: int | None, wall_s: float | None
     per_episode = wall_s * workers / episodes if episodes and wall_s else None
     head = "| part | samples | share |" + (" s / episode |" if per_episode else "")
     lines = [head, "|---|---|---|" + ("---|" if per_episode else "")]
-    for name, _ in PARTS:
+    for name in (*(part for part, _, _ in PARTS), REST):
         share = counts[name] / total
         cells = f"| {name} | {counts[name]} | {share:.1%} |"
         lines.append(cells + (f" {share * per_episode:.2f} |" if per_episode else ""))
@@ -66,6 +86,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--wall-s", type=float, help="the table's wall time [s]")
     parser.add_argument("--workers", type=int, default=2, help="the sweep's workers")
     args = parser.parse_args(argv)
+    for option, value in (("--episodes", args.episodes), ("--wall-s", args.wall_s),
+                          ("--workers", args.workers)):
+        if value is not None and value <= 0:
+            parser.error(f"{option} {value}: valid: a number above 0")
     missing = [str(p) for p in args.files if not p.is_file()]
     if missing:
         parser.error(f"no such file: {', '.join(missing)}; valid: py-spy --format raw output")
@@ -73,6 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     if not counts:
         parser.error(f"no sample of a sweep worker ({WORKER_FRAME.strip(' (')}) in the files; "
                      "valid: py-spy record --subprocesses on the impact-eval process")
+    if sum(counts.values()) == counts[REST]:
+        parser.error("no sample matched a named part (rendering, policy, physics): the markers "
+                     "in PARTS no longer name this code; valid: py-spy samples of impact-eval")
     print(split_table(counts, args.episodes, args.wall_s, args.workers), end="")
     return 0
 

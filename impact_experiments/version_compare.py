@@ -16,6 +16,7 @@ the manifest, a missing ``episodes.csv``) is one line, exit 2, before anything i
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import pandas as pd
@@ -35,29 +36,45 @@ def twins(tables: dict, version: int) -> list[str]:
 
 
 def compare_method(old: pd.DataFrame, new: pd.DataFrame) -> dict[str, object]:
-    """One method's rows on each side: pooled successes, Fisher p, moved cells, safety means."""
+    """One method's rows on each side, over the cells (``param_value``) both sides ran:
+    pooled successes, Fisher p, moved cells, safety means; the cells only one side ran are
+    named, not pooled (an unfinished twin must not look better for lacking its hard cells)."""
+    cells_old, cells_new = set(old["param_value"]), set(new["param_value"])
+    shared = sorted(cells_old & cells_new)
+    old, new = old[old["param_value"].isin(shared)], new[new["param_value"].isin(shared)]
     k1, n1, k2, n2 = int(old["success"].sum()), len(old), int(new["success"].sum()), len(new)
-    p = fisher_two_sided(k1, n1, k2, n2)
+    p = fisher_two_sided(k1, n1, k2, n2) if n1 and n2 else 1.0
     per_cell = pd.concat([old.groupby("param_value")["success"].sum().rename("old"),
                           new.groupby("param_value")["success"].sum().rename("new")], axis=1)
-    moved = per_cell[per_cell["old"] != per_cell["new"]].fillna(0)
+    moved = per_cell[per_cell["old"] != per_cell["new"]]
+    one_side = [f"{v:g} only {side}" for side, only in (("old", cells_old - cells_new),
+                                                        ("new", cells_new - cells_old))
+                for v in sorted(only)]
     row: dict[str, object] = {
         "old": f"{k1}/{n1}", "new": f"{k2}/{n2}", "fisher_p": p,
         "significantly_lower": n1 > 0 and n2 > 0 and k2 / n2 < k1 / n1 and p < 0.05,
-        "cells_moved": "; ".join(f"{v:g}: {int(r.old)}→{int(r.new)}"
-                                 for v, r in moved.iterrows()) or "none"}
+        "cells_moved": "; ".join([*(f"{v:g}: {int(r.old)}→{int(r.new)}"
+                                    for v, r in moved.iterrows()), *one_side]) or "none"}
     for col in SAFETY:
-        if col in old and col in new:
+        if col in old and col in new:  # means over the episodes that measured it
             row[col] = f"{old[col].mean():.2f} → {new[col].mean():.2f}"
     return row
 
 
 def compare_table(old: pd.DataFrame, new: pd.DataFrame) -> pd.DataFrame:
-    """:func:`compare_method` for every method on both sides, in the old table's order."""
-    methods = [m for m in dict.fromkeys(old["method"]) if m in set(new["method"])]
-    return pd.DataFrame([{"method": m, **compare_method(old[old["method"] == m],
-                                                      new[new["method"] == m])}
-                         for m in methods])
+    """:func:`compare_method` for every method of either side, in the old table's order; a
+    method that one side lacks gets a row saying so."""
+    rows = []
+    for method in dict.fromkeys([*old["method"], *new["method"]]):
+        a, b = old[old["method"] == method], new[new["method"] == method]
+        if a.empty or b.empty:
+            rows.append({"method": method, "old": f"{int(a['success'].sum())}/{len(a)}",
+                         "new": f"{int(b['success'].sum())}/{len(b)}", "fisher_p": 1.0,
+                         "significantly_lower": False,
+                         "cells_moved": f"only in the {'old' if b.empty else 'new'} table"})
+            continue
+        rows.append({"method": method, **compare_method(a, b)})
+    return pd.DataFrame(rows)
 
 
 def markdown(name: str, version: int, rows: pd.DataFrame) -> str:
@@ -72,7 +89,10 @@ def markdown(name: str, version: int, rows: pd.DataFrame) -> str:
 
 
 def _cell(column: str, value: object) -> str:
-    """One table cell: p to 3 significant digits, the verdict as yes (bold) / no."""
+    """One table cell: p to 3 significant digits, the verdict as yes (bold) / no, a value
+    that is not there as –."""
+    if isinstance(value, float) and math.isnan(value):
+        return "–"
     if column == "fisher_p":
         return f"{value:.3g}"
     if column == "significantly_lower":
@@ -105,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
             csv = args.results / manifest[name]["dir"] / "episodes.csv"
             if not csv.is_file():
                 parser.error(f"{name}: no {csv}; valid: a recorded table's folder")
-            frames[name] = pd.read_csv(csv, keep_default_na=False)
+            frames[name] = pd.read_csv(csv, keep_default_na=False, na_values=["nan", "NaN"])
     text = "".join(markdown(t, args.version, compare_table(frames[t],
                                                             frames[f"{t}_v{args.version}"]))
                    + "\n" for t in args.tables or valid)

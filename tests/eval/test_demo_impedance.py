@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from impact_control.errors import CheckpointError, InvalidArgumentError
-from impact_control.presets import resolve_preset
+from impact_control.presets import PRESETS, REVISIONS, resolve_preset
 from impact_envs.versions import preset_revision
 from impact_eval.checkpoints import CHECKPOINTS_ENV_VAR
 from impact_eval.envs import method_env
@@ -57,3 +57,12 @@ def test_a_checkpoint_that_records_no_demo_preset_is_one_line(tmp_path: Path,
     spec = resolve_method("dp.vanilla_authors+impact+demo_impedance")
     with pytest.raises(CheckpointError, match="records no demo controller preset"):
         spec.impedance_preset(HB)
+
+
+def test_every_presets_impedance_is_the_same_in_every_revision() -> None:
+    """The demos' preset is resolved at the evaluated env's revision, not at the one the demos
+    ran (their env id's): the same section while no revision changes an impedance."""
+    for name in PRESETS:
+        sections = {revision: resolve_preset(name, revision=revision).config.impedance
+                    for revision in REVISIONS}
+        assert len(set(sections.values())) == 1, (name, sections)

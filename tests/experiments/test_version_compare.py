@@ -8,7 +8,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from impact_experiments.version_compare import compare_table, main
+from impact_experiments.version_compare import compare_table, main, markdown
 
 
 def _rows(method: str, successes: dict[float, int], n: int = 20,
@@ -30,6 +30,24 @@ def test_a_drop_of_half_is_significant_and_one_episode_is_not() -> None:
     assert not rows.loc["vanilla_dp", "significantly_lower"]
     assert rows.loc["vanilla_dp", "fisher_p"] == pytest.approx(1.0)
     assert "peak_contact_sustained_n" not in rows  # neither side has it
+
+
+def test_cells_and_methods_of_one_side_are_named_not_pooled(tmp_path: Path) -> None:
+    """An unfinished twin lacking its hard cell is compared on the shared cells only; a
+    method of one side gets its own row; a NaN safety value is left out of the mean."""
+    old = pd.DataFrame(_rows("impact", {1.0: 20, 9.0: 2}) + _rows("impact_warm", {1.0: 20}))
+    new = pd.DataFrame(_rows("impact", {1.0: 19}, over_20n_s=float("nan"))
+                       + _rows("lerobot_dp", {1.0: 5}))
+    new.loc[0, "contact_over_20n_s"] = 3.0
+    rows = compare_table(old, new).set_index("method")
+    assert (rows.loc["impact", "old"], rows.loc["impact", "new"]) == ("20/20", "19/20")
+    assert rows.loc["impact", "cells_moved"] == "1: 20→19; 9 only old"
+    assert rows.loc["impact", "contact_over_20n_s"] == "0.00 → 3.00"
+    assert rows.loc["impact_warm", "cells_moved"] == "only in the old table"
+    assert rows.loc["lerobot_dp", "cells_moved"] == "only in the new table"
+    assert not rows["significantly_lower"].any()
+    text = markdown("t", 2, compare_table(old, new))
+    assert "| impact_warm | 20/20 | 0/0 | 1 | no | only in the old table | – |" in text
 
 
 def _results(tmp_path: Path) -> Path:
