@@ -133,6 +133,21 @@ def test_trace_without_joint_friction_zeroes_the_plants_friction(monkeypatch):
     assert "writing: force in band" in lines[-1]
 
 
+def test_trace_opens_a_camera_method_as_impact_eval_does():
+    """A camera method's trace env renders its checkpoint's cameras and hides the object's
+    pose from the policy; the trace reads the object from the task instead."""
+    import impact_experiments.trace as trace_mod
+
+    env, _ = trace_mod.open_method("IMPACT/HammerBasket-v2", "impact_rgb")
+    try:
+        keys = set(env.observation_space.spaces)
+        assert {"basket_front_rgb", "basket_side_rgb"} <= keys and "object_pos" not in keys
+        env.reset(seed=0)
+        assert env.unwrapped.task.observation(env.unwrapped.sim)["object_pos"].shape == (3,)
+    finally:
+        env.close()
+
+
 @pytest.mark.parametrize("argv", [["--method", "nope", "--value", "1"],
                                   ["--method", "scripted", "--value", "-3"],
                                   ["--env", "IMPACT/Nope-v0", "--method", "scripted",
