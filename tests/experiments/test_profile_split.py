@@ -34,7 +34,8 @@ def test_each_worker_sample_counts_for_one_part_and_other_threads_for_none(tmp_p
     (f"{ROLL};act (impact_envs/policies/diffusion/policy.py:173)", "policy"),  # older py-spy
     (f"{ROLL};PickPlaceExpert.act (impact_envs/policies/experts.py:9)", "policy"),
     (f"{STEP};render ({PIXELS})", "rendering"),
-    (f"{STEP};Other.act (impact_envs/policies/experts.py:1)", "controller, env and the rest"),  # not rollout's
+    # an act that is not the rollout's
+    (f"{STEP};Other.act (impact_envs/policies/experts.py:1)", "controller, env and the rest"),
     (f"{STEP};FrankaSim.step_gripper (impact_envs/robot/sim.py:4)", "controller, env and the rest"),
 ])
 def test_parts_are_matched_by_function_and_file(stack: str, part: str) -> None:
