@@ -17,6 +17,9 @@ summary (force in band, stroke RMS) on the last line.
 adds the success test of each printed step (``succ``; HammerBasket judges success at the end).
 ``--no-joint-friction`` zeroes the arm joints' Coulomb friction in the simulated plant (an
 ablation of the robot, not of the controller), to see what the friction dead-band costs.
+``--guard`` adds the contact guard's phase (``guard``: open, window, wait, HOLD) and the
+applied force feedforward after the guard and its bounds (``ff_x ff_y ff_z`` [N], world
+frame), to see what the learned force pushes into a contact.
 """
 
 from __future__ import annotations
@@ -35,6 +38,9 @@ from impact_eval.methods import resolve_method
 from impact_eval.rollout import seed_global_rngs
 
 HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate  rel_s  hand_n"
+GUARD_HEADER = "  guard   ff_x   ff_y   ff_z"
+GUARD_PHASES = ("open", "window", "wait", "HOLD")
+"""``ContactGuard`` phases by their value (``contact_guard.OPEN`` .. ``HOLD``)."""
 
 
 def open_method(env_id: str, method: str, overrides: Sequence[str] = (),
@@ -60,9 +66,10 @@ def start_episode(env, policy, value: float, seed: int) -> dict:
 
 def trace(env_id: str, method: str, value: float, seed: int, every: int,
           overrides: Sequence[str] = (), joint_friction: bool = True,
-          robot_overrides: Sequence[str] = (), full: bool = False) -> list[str]:
+          robot_overrides: Sequence[str] = (), full: bool = False,
+          guard: bool = False) -> list[str]:
     """Run one episode (until success, or with ``full`` the step limit); return the printed
-    lines."""
+    lines (with ``guard``, the contact guard's columns too)."""
     env, policy = open_method(env_id, method, overrides, robot_overrides)
     limit = np.asarray(env.unwrapped.controller.config.limits.torque_max_nm)
     saturated = np.zeros(len(limit), dtype=int)
@@ -72,7 +79,9 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
         sim.model.dof_frictionloss[sim.arm_dof] = 0.0
     obs = start_episode(env, policy, value, seed)
     task, sim = env.unwrapped.task, env.unwrapped.sim  # the object, also for camera policies
-    lines, step, done = [HEADER + ("  succ" if full else "")], 0, False
+    lines = [HEADER + ("  succ" if full else "") + (GUARD_HEADER if guard else "")]
+    step, done = 0, False
+    guard_state = env.unwrapped.controller.guard.state
     while not done:
         action = np.asarray(policy.act(stack_obs([obs]))[0])
         obs, _, terminated, truncated, info = env.step(action)
@@ -86,7 +95,9 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
                 f"{info['wrench_slow_world'][2]:7.1f} {info['wrench_ext_world'][2]:7.1f} "
                 f"{int(info['gate_open']):5d} {release.scale:6.2f} "
                 f"{info['peak_robot_contact_force_n']:7.1f}"
-                + (f" {int(info['is_success']):5d}" if full else ""))
+                + (f" {int(info['is_success']):5d}" if full else "")
+                + (f" {GUARD_PHASES[int(guard_state.phase[0])]:>6s} "
+                   + " ".join(f"{f:6.1f}" for f in guard_state.prev_ff[:3]) if guard else ""))
         step += 1
     end = (f"success: {bool(info['is_success'])} after {step} steps; steps ending at a joint "
            f"torque limit, joints 1-7: {saturated.tolist()}")
@@ -112,6 +123,8 @@ def main(argv: list[str] | None = None) -> None:
                         help="zero the arm joints' Coulomb friction in the simulated plant")
     parser.add_argument("--full", action="store_true",
                         help="run to the step limit, not to the first success")
+    parser.add_argument("--guard", action="store_true",
+                        help="add the contact guard's phase and the applied force feedforward")
     add_robot_set(parser)
     args = parser.parse_args(argv)
     if args.every < 1:
@@ -119,7 +132,8 @@ def main(argv: list[str] | None = None) -> None:
     try:
         lines = trace(args.env, args.method, args.value, args.seed, args.every,
                       args.controller_set, joint_friction=not args.no_joint_friction,
-                      robot_overrides=args.robot_set, full=args.full)
+                      robot_overrides=args.robot_set, full=args.full,
+                      guard=args.guard)
     except ImpactError as exc:  # unknown env / method, bad value, missing checkpoint
         print(f"{parser.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise SystemExit(2) from None

@@ -1,6 +1,7 @@
 """A table on the new env version against its twin on the old one, method by method (issue 59).
 
     python -m impact_experiments.version_compare [TABLE ...] [--version 2] [--out FILE]
+    python -m impact_experiments.version_compare TABLE --wide [--methods impact,vanilla_dp]
 
 For each named table (default: every table of ``results/manifest.json`` whose twin
 ``TABLE_vN`` is recorded there, ``rerun_tables --to-version N``), the rows of ``TABLE`` (the
@@ -11,6 +12,10 @@ successes k/n on each side, the two-sided Fisher p, and whether the new version 
 episodes: time above 20 N (``contact_over_20n_s``) and the sustained contact peak
 (``peak_contact_sustained_n``, where both sides have it). Bad input (a table or twin not in
 the manifest, a missing ``episodes.csv``) is one line, exit 2, before anything is written.
+
+``--wide`` prints each table cell by cell instead: one row per method and version
+(``-vN`` first, the old version under it), successes/episodes per cell, as the results
+pages show them.
 """
 
 from __future__ import annotations
@@ -88,6 +93,31 @@ def markdown(name: str, version: int, rows: pd.DataFrame) -> str:
     return head + body
 
 
+def wide(old: pd.DataFrame, new: pd.DataFrame, version: int,
+         methods: list[str] | None = None) -> str:
+    """Both versions cell by cell as one markdown table: per method (``methods`` in that
+    order, default every method of either side), its ``-v{version}`` row, then the old
+    version's (labelled by the version in its ``env_id`` column, where it has one); a cell
+    a side did not run is –."""
+    cells = sorted(set(old["param_value"]) | set(new["param_value"]))
+    order = methods or list(dict.fromkeys([*new["method"], *old["method"]]))
+    lines = ["| method | env | " + " | ".join(f"{v:g}" for v in cells) + " |",
+             "|---|---|" + "---|" * len(cells)]
+    for method in order:
+        for label, frame in ((f"-v{version}", new), (_version(old, "old"), old)):
+            rows = frame[frame["method"] == method].groupby("param_value")["success"]
+            k, n = rows.sum(), rows.size()
+            lines.append(f"| `{method}` | {label} | " + " | ".join(
+                f"{int(k[v])}/{int(n[v])}" if v in n.index else "–" for v in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _version(frame: pd.DataFrame, fallback: str) -> str:
+    """The ``-vN`` of a table's ``env_id`` column, or ``fallback`` without one."""
+    ids = set(frame["env_id"]) if "env_id" in frame else set()
+    return "/".join(sorted("-" + i.rsplit("-", 1)[1] for i in ids)) or fallback
+
+
 def _cell(column: str, value: object) -> str:
     """One table cell: p to 3 significant digits, the verdict as yes (bold) / no, a value
     that is not there as –."""
@@ -105,6 +135,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("tables", nargs="*", metavar="TABLE", help="a table with a twin")
     parser.add_argument("--version", type=int, default=2, help="the twins' env version")
     parser.add_argument("--out", type=Path, help="also write the report here (markdown)")
+    parser.add_argument("--wide", action="store_true",
+                        help="each table cell by cell, both versions, instead of pooled")
+    parser.add_argument("--methods", help="with --wide: these methods (comma list), in order")
     parser.add_argument("--results", type=Path, default=RESULTS, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     try:
@@ -126,8 +159,17 @@ def main(argv: list[str] | None = None) -> int:
             if not csv.is_file():
                 parser.error(f"{name}: no {csv}; valid: a recorded table's folder")
             frames[name] = pd.read_csv(csv, keep_default_na=False, na_values=["nan", "NaN"])
-    text = "".join(markdown(t, args.version, compare_table(frames[t],
-                                                            frames[f"{t}_v{args.version}"]))
+    methods = args.methods.split(",") if args.methods else None
+    for table in args.tables or valid:
+        known = set(frames[table]["method"]) | set(frames[f"{table}_v{args.version}"]["method"])
+        if methods and not set(methods) <= known:
+            parser.error(f"--methods {args.methods}: not in {table}; valid: "
+                         f"{', '.join(sorted(known))}")
+    text = "".join((f"### `{t}` → `{t}_v{args.version}`\n\n"
+                    + wide(frames[t], frames[f"{t}_v{args.version}"], args.version, methods)
+                    if args.wide else
+                    markdown(t, args.version, compare_table(frames[t],
+                                                            frames[f"{t}_v{args.version}"])))
                    + "\n" for t in args.tables or valid)
     print(text, end="")
     if args.out:

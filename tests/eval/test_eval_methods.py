@@ -112,6 +112,23 @@ def test_trace_prints_one_episode():
     assert len(lines) >= 4
 
 
+def test_trace_guard_columns_show_the_applied_feedforward_carrying_the_load():
+    """--guard: the guard's phase and the applied force feedforward; while the scripted
+    expert carries a 2.5 kg hammer aloft, the vertical feedforward holds its weight
+    (24.5 N, within the learner's and the hammer's grip lever: 20-28 N) and sideways little."""
+    import impact_experiments.trace as trace_mod
+
+    lines = trace_mod.trace("IMPACT/Hammer-v1", "scripted_impact", 2.5, seed=0, every=40,
+                            guard=True)
+    assert lines[0] == trace_mod.HEADER + trace_mod.GUARD_HEADER
+    aloft = [row.split() for row in lines[1:-1] if float(row.split()[4]) > 0.1]  # obj_z
+    assert aloft
+    for row in aloft:
+        assert row[11] in trace_mod.GUARD_PHASES
+        ff_x, ff_y, ff_z = map(float, row[12:15])
+        assert 20.0 < ff_z < 28.0 and abs(ff_x) < 5.0 and abs(ff_y) < 5.0
+
+
 def test_trace_without_joint_friction_zeroes_the_plants_friction(monkeypatch):
     """--no-joint-friction: the arm's dof friction is 0 in the episode's model (after reset),
     and a Calligraphy trace ends with the writing summary."""

@@ -8,7 +8,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from impact_experiments.version_compare import compare_table, main, markdown
+from impact_experiments.version_compare import compare_table, main, markdown, wide
 
 
 def _rows(method: str, successes: dict[float, int], n: int = 20,
@@ -79,3 +79,27 @@ def test_bad_input_is_one_line(tmp_path: Path, capsys, argv, needle) -> None:
     with pytest.raises(SystemExit) as exc:
         main(["--results", str(results), *argv])
     assert exc.value.code == 2 and needle in capsys.readouterr().err.strip().splitlines()[-1]
+
+
+def test_wide_shows_both_versions_cell_by_cell() -> None:
+    """``--wide``: the new version's row above the old one's, labelled from ``env_id``; a
+    cell one side did not run is –."""
+    old = pd.DataFrame(_rows("impact", {1.0: 20, 9.0: 2})).assign(env_id="IMPACT/Hammer-v1")
+    new = pd.DataFrame(_rows("impact", {1.0: 19}) + _rows("vanilla_dp", {1.0: 4}))
+    text = wide(old, new.assign(env_id="IMPACT/Hammer-v2"), 2)
+    assert text.splitlines() == [
+        "| method | env | 1 | 9 |", "|---|---|---|---|",
+        "| `impact` | -v2 | 19/20 | – |", "| `impact` | -v1 | 20/20 | 2/20 |",
+        "| `vanilla_dp` | -v2 | 4/20 | – |", "| `vanilla_dp` | -v1 | – | – |"]
+    assert wide(old, new, 2, ["impact"]).splitlines()[2:] == [
+        "| `impact` | -v2 | 19/20 | – |", "| `impact` | -v1 | 20/20 | 2/20 |"]
+
+
+def test_wide_from_the_command_and_an_unknown_method_is_one_line(tmp_path: Path,
+                                                                 capsys) -> None:
+    results = _results(tmp_path)
+    assert main(["--results", str(results), "--wide"]) == 0
+    assert "| `impact` | -v2 | 17/20 |\n| `impact` | old | 18/20 |" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main(["--results", str(results), "--wide", "--methods", "impact,nope"])
+    assert "--methods impact,nope: not in t; valid: impact" in capsys.readouterr().err
