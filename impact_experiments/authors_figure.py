@@ -59,6 +59,7 @@ METHODS = {
     "impact_authors_rgb": ("pixels", "theirs"),
     "dp.vanilla_rgb+impact@keep_carried+demo_impedance": ("pixels", "ours"),
     "impact_rgb": ("pixels", "own_impedance"),
+    "impact_rgb_paper": ("pixels", "paper"),
     "vanilla_dp": ("ours", "vanilla"),
     "augmented_dp": ("ours", "augmented"),
     "impact_authors": ("ours", "theirs"),
@@ -67,7 +68,8 @@ METHODS = {
 }
 """Method name -> (demonstrator, role), in the table's order. With cameras, ours runs on the
 impedance of the policy's demos (``+demo_impedance``, docs/eval.md: chosen on tuning seeds);
-``impact_rgb``, on ``keep_carried``'s own impedance, is drawn beside it."""
+``impact_rgb``, on ``keep_carried``'s own impedance, is drawn beside it, and
+``impact_rgb_paper`` (the ``paper`` preset) after it."""
 
 
 def bin_rates(episodes: pd.DataFrame) -> pd.DataFrame:
