@@ -19,7 +19,10 @@ adds the success test of each printed step (``succ``; HammerBasket judges succes
 ablation of the robot, not of the controller), to see what the friction dead-band costs.
 ``--guard`` adds the contact guard's phase (``guard``: open, window, wait, HOLD) and the
 applied force feedforward after the guard and its bounds (``ff_x ff_y ff_z`` [N], world
-frame), to see what the learned force pushes into a contact.
+frame), to see what the learned force pushes into a contact. ``--contacts`` adds, under each
+printed row, the robot's contacts with the scene and the objects above 5 N (``geom/geom:
+normal force [N]``, summed per pair of geoms; the grasp's finger-pad contacts included), to
+see what the hand touches.
 """
 
 from __future__ import annotations
@@ -28,11 +31,13 @@ import argparse
 import sys
 from collections.abc import Sequence
 
+import mujoco
 import numpy as np
 
 from impact_control.errors import ImpactError
 from impact_control.policy import stack_obs
 from impact_envs.cli import add_robot_set
+from impact_envs.robot.sim_kernels import GROUP_ROBOT
 from impact_eval.envs import check_env_id, describe_env, method_env
 from impact_eval.methods import resolve_method
 from impact_eval.rollout import seed_global_rngs
@@ -41,6 +46,31 @@ HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate  rel_s 
 GUARD_HEADER = "  guard   ff_x   ff_y   ff_z"
 GUARD_PHASES = ("open", "window", "wait", "HOLD")
 """``ContactGuard`` phases by their value (``contact_guard.OPEN`` .. ``HOLD``)."""
+CONTACT_MIN_N = 5.0
+"""``--contacts`` lists the robot's contacts whose normal force sums above this [N] per pair."""
+
+
+def robot_contacts(sim) -> str:
+    """The robot's contacts with anything not the robot, summed per pair of geoms (robot geom
+    first) and above ``CONTACT_MIN_N``, as ``"robot/other: N"`` sorted by force."""
+    m, d = sim.model, sim.data
+    force, pairs = np.zeros(6), {}
+    for i in range(d.ncon):
+        g = d.contact.geom[i]
+        robot = [int(x) for x in g if sim.geom_group[x] == GROUP_ROBOT]
+        if len(robot) != 1:
+            continue
+        other = int(g[1]) if robot[0] == int(g[0]) else int(g[0])
+        mujoco.mj_contactForce(m, d, i, force)
+        key = f"{_geom_name(m, robot[0])}/{_geom_name(m, other)}"
+        pairs[key] = pairs.get(key, 0.0) + float(force[0])
+    shown = sorted(((n, k) for k, n in pairs.items() if n > CONTACT_MIN_N), reverse=True)
+    return "; ".join(f"{k}: {n:.0f}" for n, k in shown) or "none"
+
+
+def _geom_name(model, geom: int) -> str:
+    """A geom's name, or its body's where the geom has none."""
+    return model.geom(geom).name or model.body(int(model.geom_bodyid[geom])).name
 
 
 def open_method(env_id: str, method: str, overrides: Sequence[str] = (),
@@ -67,9 +97,10 @@ def start_episode(env, policy, value: float, seed: int) -> dict:
 def trace(env_id: str, method: str, value: float, seed: int, every: int,
           overrides: Sequence[str] = (), joint_friction: bool = True,
           robot_overrides: Sequence[str] = (), full: bool = False,
-          guard: bool = False) -> list[str]:
+          guard: bool = False, contacts: bool = False) -> list[str]:
     """Run one episode (until success, or with ``full`` the step limit); return the printed
-    lines (with ``guard``, the contact guard's columns too)."""
+    lines (with ``guard``, the contact guard's columns too; with ``contacts``, a line of the
+    robot's contacts under each row)."""
     env, policy = open_method(env_id, method, overrides, robot_overrides)
     limit = np.asarray(env.unwrapped.controller.config.limits.torque_max_nm)
     saturated = np.zeros(len(limit), dtype=int)
@@ -98,6 +129,8 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
                 + (f" {int(info['is_success']):5d}" if full else "")
                 + (f" {GUARD_PHASES[int(guard_state.phase[0])]:>6s} "
                    + " ".join(f"{f:6.1f}" for f in guard_state.prev_ff[:3]) if guard else ""))
+            if contacts:
+                lines.append(f"      contacts: {robot_contacts(sim)}")
         step += 1
     end = (f"success: {bool(info['is_success'])} after {step} steps; steps ending at a joint "
            f"torque limit, joints 1-7: {saturated.tolist()}")
@@ -125,6 +158,8 @@ def main(argv: list[str] | None = None) -> None:
                         help="run to the step limit, not to the first success")
     parser.add_argument("--guard", action="store_true",
                         help="add the contact guard's phase and the applied force feedforward")
+    parser.add_argument("--contacts", action="store_true",
+                        help="list the robot's contacts above 5 N under each row")
     add_robot_set(parser)
     args = parser.parse_args(argv)
     if args.every < 1:
@@ -133,7 +168,7 @@ def main(argv: list[str] | None = None) -> None:
         lines = trace(args.env, args.method, args.value, args.seed, args.every,
                       args.controller_set, joint_friction=not args.no_joint_friction,
                       robot_overrides=args.robot_set, full=args.full,
-                      guard=args.guard)
+                      guard=args.guard, contacts=args.contacts)
     except ImpactError as exc:  # unknown env / method, bad value, missing checkpoint
         print(f"{parser.prog}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise SystemExit(2) from None

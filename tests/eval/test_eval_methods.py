@@ -129,6 +129,25 @@ def test_trace_guard_columns_show_the_applied_feedforward_carrying_the_load():
         assert 20.0 < ff_z < 28.0 and abs(ff_x) < 5.0 and abs(ff_y) < 5.0
 
 
+def test_trace_contacts_show_the_grasp_while_carrying():
+    """--contacts: a line under each row; while the scripted expert carries the 2.5 kg hammer
+    aloft, the finger pads hold its handle (each pad's grip above 5 N) and nothing else of the
+    robot touches anything."""
+    import impact_experiments.trace as trace_mod
+
+    lines = trace_mod.trace("IMPACT/Hammer-v1", "scripted_impact", 2.5, seed=0, every=40,
+                            contacts=True)
+    rows = lines[1:-1]
+    assert all(c.startswith("      contacts: ") for c in rows[1::2])
+    aloft = [c for r, c in zip(rows[0::2], rows[1::2], strict=True)
+             if float(r.split()[4]) > 0.1]
+    assert aloft
+    for line in aloft:
+        pairs = dict(p.split(": ") for p in line.split("contacts: ")[1].split("; "))
+        assert set(pairs) == {"left_pad/hammer_handle", "right_pad/hammer_handle"}
+        assert all(float(n) > 5.0 for n in pairs.values())
+
+
 def test_trace_without_joint_friction_zeroes_the_plants_friction(monkeypatch):
     """--no-joint-friction: the arm's dof friction is 0 in the episode's model (after reset),
     and a Calligraphy trace ends with the writing summary."""
