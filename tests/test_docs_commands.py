@@ -48,7 +48,7 @@ class Plan:
     extra: tuple[str, ...] = field(default=())
 
 
-SYNOPSIS = "impact-eval --env IMPACT/Hammer-v1 \\\n    --method scripted,scripted_impact,vanilla_dp"
+SYNOPSIS = "impact-eval --env IMPACT/Hammer-v2 \\\n    --method scripted,scripted_impact,vanilla_dp"
 
 PLANS = (
     Plan('pip install -e ".[bench]" && impact-eval --quick --out results/quickstart',
@@ -70,7 +70,7 @@ PLANS = (
     Plan("table = impact_eval.evaluate(my_policy",
          substitutions=(("import impact_eval\n", "import impact_eval\nfrom impact_envs.policies"
                          ".experts import make_expert\nmy_policy = make_expert('IMPACT/Hammer-"
-                         "v1')\n"), ("[0.5, 2.0, 5.0]", "[2.0]"), ("episodes=20", "episodes=1")),
+                         "v2')\n"), ("[0.5, 2.0, 5.0]", "[2.0]"), ("episodes=20", "episodes=1")),
          check="assert len(table) == 1 and table['method'].tolist() == ['mine']"),
 )
 
