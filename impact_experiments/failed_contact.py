@@ -50,8 +50,8 @@ def markdown(new: pd.DataFrame, old: pd.DataFrame | None, long_s: float) -> str:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for method, r in new.iterrows():
         k, n = int(r["long"]), int(r["episodes"])
-        cells = [f"`{method}`", str(int(r["failed"])), f"{r['over_20n_p90_s']:.2f}",
-                 f"{r['sustained_p90_n']:.1f}", f"{k}/{n}"]
+        cells = [f"`{method}`", str(int(r["failed"])), _number(r["over_20n_p90_s"], 2),
+                 _number(r["sustained_p90_n"], 1), f"{k}/{n}"]
         if old is not None:
             if method in old.index:
                 k_old, n_old = int(old.loc[method, "long"]), int(old.loc[method, "episodes"])
@@ -60,6 +60,11 @@ def markdown(new: pd.DataFrame, old: pd.DataFrame | None, long_s: float) -> str:
                 cells += ["–", "–"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def _number(value: float, digits: int) -> str:
+    """A percentile to ``digits`` decimals; – where it is undefined (no failed episode)."""
+    return "–" if pd.isna(value) else f"{value:.{digits}f}"
 
 
 def _read(parser: argparse.ArgumentParser, folder: Path) -> pd.DataFrame:

@@ -34,6 +34,7 @@ from collections.abc import Sequence
 import mujoco
 import numpy as np
 
+from impact_control.contact_guard import HOLD, OPEN, WAIT, WINDOW
 from impact_control.errors import ImpactError
 from impact_control.policy import stack_obs
 from impact_envs.cli import add_robot_set
@@ -44,8 +45,8 @@ from impact_eval.rollout import seed_global_rngs
 
 HEADER = "step  ee_z   tgt_z  grip   obj_z  pred_z  slow_z   ext_z  gate  rel_s  hand_n"
 GUARD_HEADER = "  guard   ff_x   ff_y   ff_z"
-GUARD_PHASES = ("open", "window", "wait", "HOLD")
-"""``ContactGuard`` phases by their value (``contact_guard.OPEN`` .. ``HOLD``)."""
+GUARD_PHASES = {OPEN: "open", WINDOW: "window", WAIT: "wait", HOLD: "HOLD"}
+"""``ContactGuard`` phases (``GuardState.phase``) by the guard's own constants."""
 CONTACT_MIN_N = 5.0
 """``--contacts`` lists the robot's contacts whose normal force sums above this [N] per pair."""
 
@@ -127,7 +128,7 @@ def trace(env_id: str, method: str, value: float, seed: int, every: int,
                 f"{int(info['gate_open']):5d} {release.scale:6.2f} "
                 f"{info['peak_robot_contact_force_n']:7.1f}"
                 + (f" {int(info['is_success']):5d}" if full else "")
-                + (f" {GUARD_PHASES[int(guard_state.phase[0])]:>6s} "
+                + (f" {GUARD_PHASES[float(guard_state.phase[0])]:>6s} "
                    + " ".join(f"{f:6.1f}" for f in guard_state.prev_ff[:3]) if guard else ""))
             if contacts:
                 lines.append(f"      contacts: {robot_contacts(sim)}")

@@ -159,6 +159,9 @@ def main(argv: list[str] | None = None) -> int:
             if not csv.is_file():
                 parser.error(f"{name}: no {csv}; valid: a recorded table's folder")
             frames[name] = pd.read_csv(csv, keep_default_na=False, na_values=["nan", "NaN"])
+    if args.methods is not None and not args.wide:
+        parser.error(f"--methods {args.methods}: only with --wide; valid: add --wide, or drop "
+                     f"--methods (the pooled report covers every method)")
     methods = args.methods.split(",") if args.methods else None
     for table in args.tables or valid:
         known = set(frames[table]["method"]) | set(frames[f"{table}_v{args.version}"]["method"])

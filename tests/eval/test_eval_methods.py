@@ -124,7 +124,7 @@ def test_trace_guard_columns_show_the_applied_feedforward_carrying_the_load():
     aloft = [row.split() for row in lines[1:-1] if float(row.split()[4]) > 0.1]  # obj_z
     assert aloft
     for row in aloft:
-        assert row[11] in trace_mod.GUARD_PHASES
+        assert row[11] in trace_mod.GUARD_PHASES.values()
         ff_x, ff_y, ff_z = map(float, row[12:15])
         assert 20.0 < ff_z < 28.0 and abs(ff_x) < 5.0 and abs(ff_y) < 5.0
 

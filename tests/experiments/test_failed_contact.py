@@ -43,6 +43,12 @@ def test_the_command_compares_two_tables(tmp_path: Path, capsys) -> None:
     assert out[3] == "| `b` | 1 | 0.00 | 0.0 | 0/1 | – | – |"
 
 
+def test_a_method_without_failures_has_no_percentile(tmp_path: Path, capsys) -> None:
+    table = _table(tmp_path / "t", [("a", 1, 2.0), ("a", 1, 0.0)])
+    assert main([str(table)]) == 0
+    assert capsys.readouterr().out.splitlines()[2] == "| `a` | 0 | – | – | 1/2 |"
+
+
 @pytest.mark.parametrize("argv, needle", [
     (["{empty}"], "no {empty}/episodes.csv; valid: a sweep's output folder"),
     (["{bare}"], "lacks contact_over_20n_s, peak_contact_sustained_n; valid"),

@@ -103,3 +103,14 @@ def test_wide_from_the_command_and_an_unknown_method_is_one_line(tmp_path: Path,
     with pytest.raises(SystemExit):
         main(["--results", str(results), "--wide", "--methods", "impact,nope"])
     assert "--methods impact,nope: not in t; valid: impact" in capsys.readouterr().err
+
+
+def test_methods_without_wide_is_refused(tmp_path: Path, capsys) -> None:
+    """--methods picks the rows of --wide; without it (the pooled report of every method) it
+    is one line, exit 2, nothing written."""
+    results = _results(tmp_path)
+    out = tmp_path / "report.md"
+    with pytest.raises(SystemExit) as exc:
+        main(["--results", str(results), "--methods", "impact", "--out", str(out)])
+    assert exc.value.code == 2 and not out.exists()
+    assert "--methods impact: only with --wide" in capsys.readouterr().err.strip().splitlines()[-1]
